@@ -1,0 +1,77 @@
+"""Telling layouts apart: from metadata first, then from the aspect ratio.
+
+Order: the ``envconv:layout`` tag (with ``envconv:guard``), then OpenEXR's ``envmap`` attribute
+(``latlong`` → latlong, ``cube`` → cube-exr), then the aspect ratio. Aspects that only one
+layout has are guessed: 3:4 cube-vcross, 4:3 cube-hcross, 6:1 cube-hstrip, 3:2 tennisball.
+Shared aspects are refused with a message naming the candidates, except 2:1: a 2:1 image is a
+lat-long unless it is black outside two inscribed disks, which is what an untagged packed
+paraboloid looks like; then it is ambiguous too. 1:1 (sphere or angular) and 1:6 (cube-vstrip or
+cube-exr) always need ``--from``.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from .errors import LayoutError
+from .layouts import LAYOUTS, Layout, get_layout
+
+__all__ = ["detect_layout"]
+
+_UNIQUE_ASPECTS = {
+    (3, 4): "cube-vcross",
+    (4, 3): "cube-hcross",
+    (6, 1): "cube-hstrip",
+    (3, 2): "tennisball",
+}
+_SHARED_ASPECTS = {(1, 1): ("sphere", "angular"), (1, 6): ("cube-vstrip", "cube-exr")}
+
+
+def detect_layout(
+    width: int, height: int, metadata: dict[str, Any], pixels: np.ndarray | None = None
+) -> tuple[Layout, int]:
+    """Return (layout, guard) of an image, or raise LayoutError asking for ``--from``."""
+    tag = metadata.get("envconv:layout")
+    guard = int(metadata.get("envconv:guard", 0) or 0)
+    if tag in LAYOUTS:
+        layout = get_layout(tag)
+        return layout, guard
+    envmap = str(metadata.get("envmap", "")).lower()
+    if envmap == "latlong":
+        return get_layout("latlong"), 0
+    if envmap == "cube":
+        return get_layout("cube-exr"), 0
+    return _from_aspect(width, height, pixels), 0
+
+
+def _from_aspect(width: int, height: int, pixels: np.ndarray | None) -> Layout:
+    for (aw, ah), name in _UNIQUE_ASPECTS.items():
+        if width * ah == height * aw:
+            return get_layout(name)
+    for (aw, ah), names in _SHARED_ASPECTS.items():
+        if width * ah == height * aw:
+            raise LayoutError(
+                f"input is {width}x{height}: aspect {aw}:{ah} could be {' or '.join(names)} "
+                "and the file has no layout metadata; pass --from"
+            )
+    if width == 2 * height:
+        if pixels is not None and _black_outside_two_disks(pixels):
+            raise LayoutError(
+                f"input is {width}x{height} and black outside two disks: it could be latlong or "
+                "paraboloid; pass --from"
+            )
+        return get_layout("latlong")
+    raise LayoutError(f"input is {width}x{height}, which matches no layout's aspect; pass --from")
+
+
+def _black_outside_two_disks(pixels: np.ndarray) -> bool:
+    height, width = pixels.shape[:2]
+    n = height
+    y = (np.arange(n) + 0.5) / n * 2 - 1
+    x = (np.arange(width) + 0.5) / n
+    x = np.where(x < 1.0, x * 2 - 1, (x - 1.0) * 2 - 1)
+    outside = (x[None, :] ** 2 + y[:, None] ** 2) > 1.0 + 4.0 / n
+    values = pixels[outside]
+    return bool(values.size) and bool(np.all(values[..., : min(3, pixels.shape[2])] == 0))

@@ -1,0 +1,95 @@
+"""EnvMap: an environment map in memory."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from .errors import LayoutError
+from .layouts import Layout, get_layout
+
+__all__ = ["EnvMap"]
+
+
+@dataclass
+class EnvMap:
+    """Pixels, layout and metadata of one environment map.
+
+    Attributes
+    ----------
+    pixels : numpy.ndarray
+        (H, W, C) float32, scene-linear, top row first. For multi-file layouts (cube-faces,
+        paraboloid-split) the cells sit side by side as one mosaic, in face order.
+    layout : Layout
+        The layout; ``EnvMap(..., layout="latlong")`` accepts a name too.
+    guard : int
+        Guard-ring width G in pixels (0 for none).
+    channels : tuple of str
+        Channel names, e.g. ``("R", "G", "B")`` or ``("R", "G", "B", "A")``.
+    metadata : dict
+        File metadata (name → value) carried from the input to the output.
+    pixel_type : str
+        Storage type the pixels came from: ``"half"``, ``"float"``, ``"uint8"`` or ``"uint16"``.
+    """
+
+    pixels: np.ndarray
+    layout: Layout
+    guard: int = 0
+    channels: tuple[str, ...] = ()
+    metadata: dict[str, Any] = field(default_factory=dict)
+    pixel_type: str = "float"
+
+    def __post_init__(self) -> None:
+        self.layout = get_layout(self.layout)
+        pixels = np.asarray(self.pixels)
+        if pixels.ndim == 2:
+            pixels = pixels[:, :, None]
+        if pixels.ndim != 3:
+            raise LayoutError(f"pixels must be (H, W, C), got shape {pixels.shape}")
+        self.pixels = np.ascontiguousarray(pixels, dtype=np.float32)
+        if not self.channels:
+            self.channels = default_channel_names(self.pixels.shape[2])
+        if len(self.channels) != self.pixels.shape[2]:
+            raise LayoutError(
+                f"{len(self.channels)} channel names for {self.pixels.shape[2]} channels"
+            )
+        self.channels = tuple(self.channels)
+        _ = self.size  # validates that the pixels fit the layout
+
+    @property
+    def size(self) -> int:
+        """Characteristic size N (see CONVENTIONS: height of a lat-long, face edge, diameter)."""
+        height, width = self.pixels.shape[:2]
+        return self.layout.size_from_image(width, height, self.guard)
+
+    @property
+    def height(self) -> int:
+        return int(self.pixels.shape[0])
+
+    @property
+    def width(self) -> int:
+        return int(self.pixels.shape[1])
+
+    @property
+    def alpha_index(self) -> int | None:
+        """Index of the alpha channel (named A or alpha), or None."""
+        for index, name in enumerate(self.channels):
+            if name.upper() == "A" or name.lower() == "alpha":
+                return index
+        return None
+
+    def __repr__(self) -> str:
+        return (
+            f"EnvMap({self.layout.name}, N={self.size}, G={self.guard}, "
+            f"{self.width}x{self.height}x{len(self.channels)} {','.join(self.channels)})"
+        )
+
+
+def default_channel_names(count: int) -> tuple[str, ...]:
+    """Conventional channel names for ``count`` channels (Y, RGB, RGBA, then numbered)."""
+    if count == 1:
+        return ("Y",)
+    base = ("R", "G", "B", "A")
+    return tuple(base[i] if i < 4 else f"channel{i}" for i in range(count))

@@ -1,0 +1,123 @@
+"""Public pixel ↔ direction maps of every layout, vectorised over numpy arrays.
+
+Coordinates follow CONVENTIONS.md: (u, v) in [0, 1]² of the whole image (u right, v down),
+pixel centres at ((i + 0.5)/W, (j + 0.5)/H), world frame +Y up with +Z the lat-long centre.
+For multi-file layouts (u, v) refer to the in-memory mosaic (cells side by side, face order).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .layouts import Layout, get_layout
+
+__all__ = [
+    "kernel_geometry",
+    "uv_to_dir",
+    "dir_to_uv",
+    "pixel_directions",
+    "pixel_solid_angles",
+    "horizon_pitch",
+]
+
+
+def kernel_geometry(layout: Layout | str, size: int, guard: int = 0):
+    """The (geo, cell_face, cell_turns, face_cell) arrays the kernels take."""
+    layout = get_layout(layout)
+    layout.validate_size(size)
+    geo = np.array(
+        [layout.family, size, guard, layout.aspect, layout.columns, layout.rows], np.int64
+    )
+    return (geo, *layout.kernel_tables())
+
+
+def uv_to_dir(layout, u, v, size: int = 512, guard: int = 0, fill: bool = False):
+    """Directions of image points (u, v) of a layout of size N with guard G.
+
+    Returns
+    -------
+    dirs : (..., 3) float64
+        Unit directions; zero where the point holds no direction.
+    flags : (...) int8
+        2 in the valid region, 1 in a guard ring (or anywhere with ``fill``), 0 no data.
+    """
+    from .kernels.resample import map_points_to_dirs
+
+    layout = get_layout(layout)
+    width, height = layout.image_size(size, guard)
+    u, v = np.broadcast_arrays(np.asarray(u, np.float64), np.asarray(v, np.float64))
+    shape = u.shape
+    points = np.stack([np.clip(u, 0.0, 1.0) * width, np.clip(v, 0.0, 1.0) * height], -1)
+    points = np.ascontiguousarray(points.reshape(-1, 2))
+    # u = 1 or v = 1 belongs to the last pixel (half-open intervals, CONVENTIONS.md).
+    points[:, 0] = np.minimum(points[:, 0], np.nextafter(width, 0))
+    points[:, 1] = np.minimum(points[:, 1], np.nextafter(height, 0))
+    geo, cell_face, cell_turns, _ = kernel_geometry(layout, size, guard)
+    dirs = np.zeros((points.shape[0], 3))
+    flags = np.zeros(points.shape[0], np.int8)
+    map_points_to_dirs(geo, cell_face, cell_turns, points, bool(fill), dirs, flags)
+    return dirs.reshape(*shape, 3), flags.reshape(shape)
+
+
+def dir_to_uv(layout, dirs, size: int = 512, guard: int = 0):
+    """(u, v) of unit directions (..., 3) in a layout of size N with guard G."""
+    from .kernels.resample import map_dirs_to_points
+
+    layout = get_layout(layout)
+    width, height = layout.image_size(size, guard)
+    dirs = np.asarray(dirs, np.float64)
+    shape = dirs.shape[:-1]
+    flat = np.ascontiguousarray(dirs.reshape(-1, 3))
+    norm = np.linalg.norm(flat, axis=1, keepdims=True)
+    flat = np.ascontiguousarray(flat / np.where(norm > 0, norm, 1.0))
+    geo, _, cell_turns, face_cell = kernel_geometry(layout, size, guard)
+    points = np.zeros((flat.shape[0], 2))
+    map_dirs_to_points(geo, cell_turns, face_cell, flat, points)
+    u = np.clip(points[:, 0] / width, 0.0, 1.0).reshape(shape)
+    v = np.clip(points[:, 1] / height, 0.0, 1.0).reshape(shape)
+    return u, v
+
+
+def pixel_directions(layout, size: int, guard: int = 0, fill: bool = False):
+    """Directions (H, W, 3) and flags (H, W) of every pixel centre of a layout."""
+    layout = get_layout(layout)
+    width, height = layout.image_size(size, guard)
+    u = (np.arange(width) + 0.5) / width
+    v = (np.arange(height) + 0.5) / height
+    uu, vv = np.meshgrid(u, v)
+    return uv_to_dir(layout, uu, vv, size, guard, fill)
+
+
+def pixel_solid_angles(layout, size: int, guard: int = 0, samples: int = 4) -> np.ndarray:
+    """Solid angle in steradians of the valid part of every pixel, (H, W) float64.
+
+    Sums to 4π over a whole layout (up to the S×S sub-sampling error at disk rims).
+    """
+    from .kernels.resample import pixel_solid_angles as kernel
+
+    layout = get_layout(layout)
+    width, height = layout.image_size(size, guard)
+    geo, cell_face, cell_turns, _ = kernel_geometry(layout, size, guard)
+    out = np.zeros((height, width))
+    kernel(geo, cell_face, cell_turns, 1.0, 1.0, int(samples), out)
+    return out
+
+
+def horizon_pitch(layout) -> float:
+    """Mean angular pixel pitch (radians × N) along the horizon, for a layout of size N = 1.
+
+    The pitch at a direction is √Ω of a pixel there. Averaged over 360 horizon directions, it
+    is k in ``pitch = k / N``: π for lat-long, about 1.68 for cube faces.
+    """
+    from .kernels.resample import dir_density
+
+    layout = get_layout(layout)
+    phi = (np.arange(360) + 0.5) * (2 * math.pi / 360)
+    dirs = np.ascontiguousarray(np.stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)], -1))
+    geo, _, _, _ = kernel_geometry(layout, 64, 0)
+    dens = np.zeros(dirs.shape[0])
+    dir_density(geo, dirs, dens)
+    # A pixel spans 2/(aspect N) × 2/N in (a, b).
+    return float(np.mean(np.sqrt(dens * 4.0 / layout.aspect)))

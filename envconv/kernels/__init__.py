@@ -1,0 +1,3 @@
+"""Numba kernels: geometry dispatch and the fused resampler. Private; use envconv.resample."""
+
+__all__: list[str] = []

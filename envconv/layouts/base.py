@@ -1,0 +1,155 @@
+"""The small interface every layout implements.
+
+A layout is a grid of equal cells laid over the image. Each cell holds one *face*: a square or
+rectangular chart of directions with local coordinates (a, b) in [-1, 1]², a to the right and b
+downward. The numba functions of the layout's geometry family turn (face, a, b) into a direction
+and back; this module holds the Python-side description (size rule, cell placement, files).
+
+Pixel-centre rule: pixel (i, j) of a W×H image covers [i/W, (i+1)/W] × [j/H, (j+1)/H] and its
+centre is at ((i + 0.5)/W, (j + 0.5)/H). With a guard ring of G pixels every cell grows by G on
+each side; inside a grown cell whose top-left pixel is (x0, y0),
+``a = 2 (x + 0.5 - x0 - G) / (aspect N) - 1`` and ``b = 2 (y + 0.5 - y0 - G) / N - 1``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import LayoutError
+
+__all__ = [
+    "Cell",
+    "Layout",
+    "FAMILY_LATLONG",
+    "FAMILY_CUBE_GL",
+    "FAMILY_CUBE_EXR",
+    "FAMILY_SPHERE",
+    "FAMILY_ANGULAR",
+    "FAMILY_PARABOLOID",
+    "FAMILY_TENNISBALL",
+]
+
+# Geometry family codes; the kernels dispatch on these integers.
+FAMILY_LATLONG = 0
+FAMILY_CUBE_GL = 1
+FAMILY_CUBE_EXR = 2
+FAMILY_SPHERE = 3
+FAMILY_ANGULAR = 4
+FAMILY_PARABOLOID = 5
+FAMILY_TENNISBALL = 6
+
+# Families whose valid region in a cell is the unit disk a² + b² <= 1.
+DISK_FAMILIES = (FAMILY_SPHERE, FAMILY_ANGULAR, FAMILY_PARABOLOID)
+
+
+@dataclass(frozen=True)
+class Cell:
+    """One occupied cell: grid column and row, the face it holds, and its rotation.
+
+    ``turns`` counts half turns (0 or 2 quarter turns): 2 means the face is stored rotated by
+    180°, so the cell's local (a', b') is the face's (-a, -b).
+    """
+
+    col: int
+    row: int
+    face: int
+    turns: int = 0
+
+
+@dataclass(frozen=True)
+class Layout:
+    """Description of one layout: its grid, cells, size rule and files.
+
+    Attributes
+    ----------
+    name : str
+        Registry name, e.g. ``"cube-vcross"``.
+    family : int
+        Geometry family code (``FAMILY_*``) whose numba functions map (face, a, b) ↔ direction.
+    description : str
+        One line for ``envconv layouts``.
+    columns, rows : int
+        Grid of cells, in cells.
+    aspect : int
+        Cell width in units of N (the cell height is always N): 2 for lat-long, 3 for tennisball.
+    cells : tuple of Cell
+        Occupied cells; grid cells not listed hold no face and are invalid.
+    face_names : tuple of str
+        Names of the faces, in face-index order (also the file-part names of multi-file layouts).
+    multi_file : bool
+        True when the layout is stored as one file per cell, named with ``{face}``.
+    """
+
+    name: str
+    family: int
+    description: str
+    columns: int
+    rows: int
+    aspect: int
+    cells: tuple[Cell, ...]
+    face_names: tuple[str, ...]
+    multi_file: bool = False
+
+    @property
+    def disk(self) -> bool:
+        """True when each cell's valid region is the unit disk rather than the whole cell."""
+        return self.family in DISK_FAMILIES
+
+    @property
+    def n_faces(self) -> int:
+        return len(self.face_names)
+
+    def cell_size(self, n: int, guard: int = 0) -> tuple[int, int]:
+        """Width and height in pixels of one (grown) cell."""
+        return self.aspect * n + 2 * guard, n + 2 * guard
+
+    def image_size(self, n: int, guard: int = 0) -> tuple[int, int]:
+        """Image width and height in pixels for characteristic size ``n`` and guard ``guard``.
+
+        For multi-file layouts this is the size of the in-memory mosaic (all cells side by side).
+        """
+        cw, ch = self.cell_size(n, guard)
+        return self.columns * cw, self.rows * ch
+
+    def file_size(self, n: int, guard: int = 0) -> tuple[int, int]:
+        """Size of each file on disk (one cell for multi-file layouts)."""
+        return self.cell_size(n, guard) if self.multi_file else self.image_size(n, guard)
+
+    def size_from_image(self, width: int, height: int, guard: int = 0) -> int:
+        """Characteristic size N of a ``width`` × ``height`` image, or raise LayoutError."""
+        if height % self.rows or width % self.columns:
+            raise LayoutError(self._misfit(width, height, guard))
+        cw, ch = width // self.columns, height // self.rows
+        n = ch - 2 * guard
+        if n < 1 or cw != self.aspect * n + 2 * guard:
+            raise LayoutError(self._misfit(width, height, guard))
+        return n
+
+    def _misfit(self, width: int, height: int, guard: int) -> str:
+        w1, h1 = self.image_size(1, 0)
+        rule = (
+            f"{w1}N x {h1}N" if not guard else f"cells of ({self.aspect}N+2G) x (N+2G), G={guard}"
+        )
+        return f"image is {width}x{height}, which does not fit layout {self.name} ({rule}); pass --from"
+
+    def validate_size(self, n: int) -> None:
+        """Raise LayoutError unless ``n`` is a usable characteristic size."""
+        if not isinstance(n, (int, np.integer)) or n < 1:
+            raise LayoutError(f"size must be a positive integer, got {n!r}")
+
+    def kernel_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Integer tables the kernels read: cell → face, cell → turns, face → cell.
+
+        Cells are indexed ``row * columns + col``; an empty cell has face -1.
+        """
+        cell_face = np.full(self.columns * self.rows, -1, np.int32)
+        cell_turns = np.zeros(self.columns * self.rows, np.int32)
+        face_cell = np.zeros(max(self.n_faces, 1), np.int32)
+        for cell in self.cells:
+            index = cell.row * self.columns + cell.col
+            cell_face[index] = cell.face
+            cell_turns[index] = cell.turns
+            face_cell[cell.face] = index
+        return cell_face, cell_turns, face_cell
