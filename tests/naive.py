@@ -1,0 +1,290 @@
+"""A slow, obviously correct numpy reference for envconv's geometry and resampler.
+
+Everything here is written out again from ``../shared/CONVENTIONS.md`` and deliberately calls
+no envconv function, so that tests comparing envconv with this module compare two independent
+readings of the contract.
+
+Coordinates: (u, v) in [0, 1]² of the whole image (u right, v down), pixel (i, j) of a W×H image
+centred at ((i + 0.5)/W, (j + 0.5)/H). Multi-file layouts (cube-faces, paraboloid-split) are
+described by their in-memory mosaic: the cells side by side in face order. Within a cell, local
+(a, b) ∈ [-1, 1]² run a right and b down; disk formulas use (X, Y) = (a, -b).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+__all__ = [
+    "GRIDS",
+    "image_size",
+    "face_to_dir",
+    "face_density",
+    "uv_to_dir",
+    "subsample_uv",
+    "sample_latlong",
+    "naive_convert",
+    "pixel_average",
+    "pixel_solid_angles",
+]
+
+# Cell tables copied from CONVENTIONS.md: family, columns, rows, cell aspect (width in N),
+# and (col, row, face, rotated 180°) for every occupied cell. Cube GL face order is
+# +X_c, −X_c, +Y_c, −Y_c, +Z_c, −Z_c; cube-exr order is +X, −X, +Y, −Y, +Z, −Z.
+_STRIP_H = tuple((k, 0, k, False) for k in range(6))
+_STRIP_V = tuple((0, k, k, False) for k in range(6))
+GRIDS = {
+    "latlong": ("latlong", 1, 1, 2, ((0, 0, 0, False),)),
+    "cube-vcross": (
+        "cube",
+        3,
+        4,
+        1,
+        ((1, 0, 2, False), (0, 1, 1, False), (1, 1, 4, False), (2, 1, 0, False),
+         (1, 2, 3, False), (1, 3, 5, True)),
+    ),  # fmt: skip
+    "cube-hcross": (
+        "cube",
+        4,
+        3,
+        1,
+        ((1, 0, 2, False), (0, 1, 1, False), (1, 1, 4, False), (2, 1, 0, False),
+         (3, 1, 5, False), (1, 2, 3, False)),
+    ),  # fmt: skip
+    "cube-hstrip": ("cube", 6, 1, 1, _STRIP_H),
+    "cube-vstrip": ("cube", 1, 6, 1, _STRIP_V),
+    "cube-faces": ("cube", 6, 1, 1, _STRIP_H),
+    "cube-exr": ("cube-exr", 1, 6, 1, _STRIP_V),
+    "sphere": ("sphere", 1, 1, 1, ((0, 0, 0, False),)),
+    "angular": ("angular", 1, 1, 1, ((0, 0, 0, False),)),
+    "paraboloid": ("paraboloid", 2, 1, 1, ((0, 0, 0, False), (1, 0, 1, False))),
+    "paraboloid-split": ("paraboloid", 2, 1, 1, ((0, 0, 0, False), (1, 0, 1, False))),
+    "tennisball": ("tennisball", 1, 2, 3, ((0, 0, 0, False), (0, 1, 1, False))),
+}
+DISK_FAMILIES = ("sphere", "angular", "paraboloid")
+
+
+def image_size(name: str, n: int) -> tuple[int, int]:
+    """(W, H) of layout ``name`` at size N (the mosaic for multi-file layouts)."""
+    _, cols, rows, aspect, _ = GRIDS[name]
+    return cols * aspect * n, rows * n
+
+
+def _normalise(x, y, z):
+    norm = np.sqrt(x * x + y * y + z * z)
+    return np.stack([x / norm, y / norm, z / norm], -1)
+
+
+def _cube_gl(face, a, b):
+    """The GL/D3D/KTX table in the cube frame c, then d = normalise(−c_x, c_y, c_z)."""
+    one = np.ones_like(a)
+    table = [
+        (one, -b, -a),  # +X_c
+        (-one, -b, a),  # -X_c
+        (a, one, b),  # +Y_c
+        (a, -one, -b),  # -Y_c
+        (a, -b, one),  # +Z_c
+        (-a, -b, -one),  # -Z_c
+    ]
+    cx, cy, cz = (np.choose(face, [t[k] for t in table]) for k in range(3))
+    return _normalise(-cx, cy, cz)
+
+
+def _cube_exr(face, a, b):
+    one = np.ones_like(a)
+    table = [
+        (one, -b, a),  # +X
+        (-one, -b, -a),  # -X
+        (a, one, -b),  # +Y
+        (a, -one, b),  # -Y
+        (-a, -b, one),  # +Z
+        (a, -b, -one),  # -Z
+    ]
+    x, y, z = (np.choose(face, [t[k] for t in table]) for k in range(3))
+    return _normalise(x, y, z)
+
+
+def face_to_dir(family: str, face, a, b) -> np.ndarray:
+    """Unit direction (..., 3) of local point (a, b) of ``face`` (inside the valid region)."""
+    face = np.asarray(face)
+    a = np.asarray(a, np.float64)
+    b = np.asarray(b, np.float64)
+    if family == "latlong":
+        lon = 2 * math.pi * (0.5 - (a + 1) / 2)
+        lat = math.pi * (0.5 - (b + 1) / 2)
+        return np.stack([np.sin(lon) * np.cos(lat), np.sin(lat), np.cos(lon) * np.cos(lat)], -1)
+    if family == "cube":
+        return _cube_gl(face, a, b)
+    if family == "cube-exr":
+        return _cube_exr(face, a, b)
+    X, Y = a, -b
+    r2 = X * X + Y * Y
+    if family == "sphere":
+        nz = np.sqrt(np.clip(1 - r2, 0, None))
+        return np.stack([2 * nz * X, 2 * nz * Y, 2 * nz * nz - 1], -1)
+    if family == "angular":
+        r = np.sqrt(r2)
+        alpha = math.pi * r
+        safe = np.where(r > 0, r, 1.0)
+        s = np.where(r > 0, np.sin(alpha) / safe, 0.0)
+        return np.stack([s * X, s * Y, np.cos(alpha)], -1)
+    if family == "paraboloid":
+        s = 1 + r2
+        z = np.where(face == 0, 1 - r2, -(1 - r2))
+        return np.stack([2 * X / s, 2 * Y / s, z / s], -1)
+    if family == "tennisball":
+        phi = (0.5 - (a + 1) / 2) * (1.5 * math.pi)
+        theta = (0.5 - (b + 1) / 2) * (0.5 * math.pi)
+        c1 = np.stack(
+            [np.sin(phi) * np.cos(theta), np.sin(theta), np.cos(phi) * np.cos(theta)], -1
+        )
+        c2 = np.stack(
+            [np.sin(theta), np.sin(phi) * np.cos(theta), -np.cos(phi) * np.cos(theta)], -1
+        )
+        return np.where((face == 0)[..., None], c1, c2)
+    raise ValueError(family)
+
+
+def face_density(family: str, face, a, b) -> np.ndarray:
+    """Solid angle per unit (a, b) area (sr), derived by hand for each family."""
+    a = np.asarray(a, np.float64)
+    b = np.asarray(b, np.float64)
+    r2 = a * a + b * b
+    if family == "latlong":  # dΩ = cos(lat) dlon dlat, dlon = π da, dlat = π/2 db
+        return np.abs(np.cos(0.5 * math.pi * b)) * (0.5 * math.pi * math.pi)
+    if family in ("cube", "cube-exr"):  # gnomonic
+        return (1 + r2) ** -1.5
+    if family == "sphere":  # α = 2 asin R: sin α dα / (R dR) = 4
+        return np.full_like(r2, 4.0)
+    if family == "angular":  # α = πR: π sin(πR) / R
+        r = np.sqrt(r2)
+        return np.where(r > 1e-12, math.pi * np.sin(math.pi * r) / np.where(r > 0, r, 1), math.pi**2)
+    if family == "paraboloid":
+        return 4.0 / (1 + r2) ** 2
+    if family == "tennisball":  # dΩ = cos θ dφ dθ, dφ = 3π/4 da, dθ = π/4 db
+        return np.abs(np.cos(0.25 * math.pi * b)) * (0.75 * math.pi * 0.25 * math.pi)
+    raise ValueError(family)
+
+
+def _locate(name: str, u, v):
+    """(face, a, b, occupied) of image points; face is 0 where the cell is empty."""
+    _, cols, rows, _, cells = GRIDS[name]
+    u = np.asarray(u, np.float64)
+    v = np.asarray(v, np.float64)
+    col = np.clip(np.floor(u * cols), 0, cols - 1).astype(int)
+    row = np.clip(np.floor(v * rows), 0, rows - 1).astype(int)
+    a = 2 * (u * cols - col) - 1
+    b = 2 * (v * rows - row) - 1
+    face = np.zeros(u.shape, int)
+    occupied = np.zeros(u.shape, bool)
+    for c, r, f, rotated in cells:
+        here = (col == c) & (row == r)
+        face[here] = f
+        occupied |= here
+        if rotated:
+            a = np.where(here, -a, a)
+            b = np.where(here, -b, b)
+    return face, a, b, occupied
+
+
+def uv_to_dir(name: str, u, v):
+    """Directions (..., 3), validity (...) and density per unit (a, b) area of image points."""
+    family = GRIDS[name][0]
+    face, a, b, valid = _locate(name, u, v)
+    if family in DISK_FAMILIES:
+        valid &= a * a + b * b <= 1.0
+    dirs = face_to_dir(family, face, a, b)
+    dirs = np.where(valid[..., None], dirs, 0.0)
+    return dirs, valid, face_density(family, face, a, b)
+
+
+def subsample_uv(name: str, n: int, samples: int, offset=(0.0, 0.0)):
+    """(u, v) of S×S stratified sub-samples of every pixel, shape (H, W, S, S).
+
+    ``offset`` moves the whole pixel grid by (dx, dy) pixels (used to build deliberately
+    shifted images that show a test can tell a half-pixel shift).
+    """
+    width, height = image_size(name, n)
+    t = (np.arange(samples) + 0.5) / samples
+    u = (np.arange(width)[None, :, None, None] + t[None, None, None, :] + offset[0]) / width
+    v = (np.arange(height)[:, None, None, None] + t[None, None, :, None] + offset[1]) / height
+    u, v = np.broadcast_arrays(u, v)
+    return np.mod(u, 1.0), np.clip(v, 0.0, 1.0 - 1e-12)
+
+
+def _weighted_mean(values, weights):
+    """Per-pixel Σ w·value / Σ w over the two sub-sample axes; 0 where Σ w = 0."""
+    wsum = weights.sum(axis=(2, 3))
+    total = np.einsum("hwij,hwijc->hwc", weights, values)
+    return np.where(wsum[..., None] > 0, total / np.where(wsum > 0, wsum, 1)[..., None], 0.0)
+
+
+def _lookup(src, ix, iy):
+    """Texels (ix, iy) of a lat-long, wrapping in longitude and continuing over the poles."""
+    height, width = src.shape[:2]
+    over_top = iy < 0
+    over_bottom = iy >= height
+    iy = np.where(over_top, -1 - iy, np.where(over_bottom, 2 * height - 1 - iy, iy))
+    ix = np.where(over_top | over_bottom, ix + width // 2, ix)
+    return src[iy, np.mod(ix, width)]
+
+
+def sample_latlong(src: np.ndarray, dirs: np.ndarray, filt: str = "bilinear") -> np.ndarray:
+    """Values (..., C) of lat-long ``src`` (H, 2H, C) in unit directions, read through ``filt``."""
+    height, width = src.shape[:2]
+    x, y, z = dirs[..., 0], dirs[..., 1], dirs[..., 2]
+    u = 0.5 - np.arctan2(x, z) / (2 * math.pi)
+    v = 0.5 - np.arcsin(np.clip(y, -1, 1)) / math.pi
+    px, py = u * width, v * height
+    if filt == "nearest":
+        ix = np.minimum(np.floor(px).astype(int), width - 1)
+        iy = np.minimum(np.floor(py).astype(int), height - 1)
+        return _lookup(src, ix, iy)
+    assert filt == "bilinear"
+    fx, fy = px - 0.5, py - 0.5
+    x0, y0 = np.floor(fx).astype(int), np.floor(fy).astype(int)
+    tx, ty = (fx - x0)[..., None], (fy - y0)[..., None]
+    return (
+        (1 - tx) * (1 - ty) * _lookup(src, x0, y0)
+        + tx * (1 - ty) * _lookup(src, x0 + 1, y0)
+        + (1 - tx) * ty * _lookup(src, x0, y0 + 1)
+        + tx * ty * _lookup(src, x0 + 1, y0 + 1)
+    )
+
+
+def naive_convert(src, to: str, n: int, samples: int = 1, filt="bilinear", rotation=None):
+    """Resample a lat-long ``src`` (H, 2H, C) into layout ``to`` of size ``n``.
+
+    For every output pixel: S×S sub-samples, each mapped to a direction, weighted by its solid
+    angle, rotated into the source frame (L'(d) = L(Rᵀ d)) and read bilinearly from the
+    source. Returns (pixels (H, W, C), alpha (H, W) = fraction of valid sub-samples).
+    """
+    u, v = subsample_uv(to, n, samples)
+    dirs, valid, density = uv_to_dir(to, u, v)
+    if rotation is not None:
+        dirs = dirs @ np.asarray(rotation)  # row vector d → Rᵀ d
+    values = sample_latlong(np.asarray(src, np.float64), dirs, filt)
+    weights = np.where(valid, density, 0.0)
+    return _weighted_mean(values, weights), valid.mean(axis=(2, 3))
+
+
+def pixel_average(name: str, n: int, radiance, samples: int = 8, offset=(0.0, 0.0)):
+    """Solid-angle mean of ``radiance(dirs) -> (..., C)`` over every pixel of a layout.
+
+    The heavily supersampled analytic image that a perfect converter would produce.
+    """
+    u, v = subsample_uv(name, n, samples, offset)
+    dirs, valid, density = uv_to_dir(name, u, v)
+    values = np.asarray(radiance(np.where(valid[..., None], dirs, [0.0, 0.0, 1.0])), np.float64)
+    return _weighted_mean(values, np.where(valid, density, 0.0))
+
+
+def pixel_solid_angles(name: str, n: int, samples: int = 8) -> np.ndarray:
+    """Solid angle (sr) of the valid part of every pixel, by S×S midpoint sub-samples."""
+    _, cols, rows, aspect, _ = GRIDS[name]
+    u, v = subsample_uv(name, n, samples)
+    _, valid, density = uv_to_dir(name, u, v)
+    # One sub-sample covers (2 / (aspect N S)) × (2 / (N S)) of (a, b).
+    area = (2.0 / (aspect * n * samples)) * (2.0 / (n * samples))
+    return np.where(valid, density, 0.0).sum(axis=(2, 3)) * area
