@@ -21,10 +21,18 @@ def mean_radiance(envmap: EnvMap) -> list[float]:
 
 
 def describe(path: str, layout: str | None = None, level: int = 0) -> dict[str, Any]:
-    """A JSON-ready record: layout, size, guard, dimensions, channels, range, mean, metadata."""
-    from .io import read
+    """A JSON-ready record: layout, size, guard, dimensions, MIP levels, channels, range, mean.
+
+    ``size`` and ``guard`` are N and G of the level read (G >> level for a MIP level);
+    ``levels`` lists [width, height] of every MIP level in the file, level 0 first.
+    """
+    from .colorflow import input_colorspace_of
+    from .io import mip_levels, read, read_header
 
     env = read(path, layout=layout, level=level)
+    # Every header attribute (envconv:*, compression, chromaticities...), not only content.
+    header = read_header(path, level)[3] if "{face}" not in str(path) else env.metadata
+    colorspace = input_colorspace_of(header, env.pixel_type)  # the file's, as read
     pixels = env.pixels
     finite = np.isfinite(pixels)
     record: dict[str, Any] = {
@@ -34,8 +42,11 @@ def describe(path: str, layout: str | None = None, level: int = 0) -> dict[str, 
         "guard": env.guard,
         "width": env.width,
         "height": env.height,
+        "level": level,
+        "levels": [list(size) for size in mip_levels(path)],
         "channels": list(env.channels),
         "pixel_type": env.pixel_type,
+        "colorspace": colorspace,
         "min": [
             float(pixels[..., c][finite[..., c]].min(initial=np.inf))
             for c in range(pixels.shape[2])
@@ -47,7 +58,7 @@ def describe(path: str, layout: str | None = None, level: int = 0) -> dict[str, 
         "nonfinite": int((~finite).sum()),
         "mean_radiance": mean_radiance(env),
         "metadata": {
-            k: (v if isinstance(v, (int, float, str)) else list(v)) for k, v in env.metadata.items()
+            k: (v if isinstance(v, (int, float, str)) else list(v)) for k, v in header.items()
         },
     }
     return record

@@ -1,9 +1,8 @@
 """Reading and writing environment maps through OpenImageIO. The only module that touches files.
 
 Formats: OpenEXR (half or float), Radiance HDR, TIFF, PNG and JPEG, chosen by the file
-extension. Pixels are always float32 in memory. Until colour management lands, integer files
-are read and written as OpenImageIO gives them: code values scaled to [0, 1], with no transfer
-function applied, and float data written to an integer format is clamped to [0, 1].
+extension. Pixels are always float32 in memory, in scene-linear Rec.709: :func:`read` and
+:func:`write` convert colour, range and bit depth through :mod:`envconv.colorflow`.
 
 Multi-file layouts (cube-faces, paraboloid-split) name their parts with ``{face}`` in the path:
 px nx py ny pz nz, or front back.
@@ -16,6 +15,7 @@ from __future__ import annotations
 
 import logging
 import os
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -26,7 +26,8 @@ from .envmap import EnvMap
 from .errors import ImageIOError, LayoutError
 from .layouts import get_layout
 
-__all__ = ["read", "write", "read_image", "output_paths", "FORMATS"]
+__all__ = ["read", "write", "read_image", "read_header", "read_pixel_type", "choose_pixel_type",
+           "output_paths", "mip_levels", "FORMATS"]
 
 log = logging.getLogger(__name__)
 
@@ -45,7 +46,7 @@ FORMATS = {
 _DROP_PREFIXES = ("oiio:", "envconv:", "openexr:", "tiff:", "png:", "jpeg:", "exif:", "hdr:")
 _DROP_NAMES = {"envmap", "compression", "planarconfig", "Orientation", "XResolution",
                "YResolution", "ResolutionUnit", "PixelAspectRatio", "screenWindowCenter",
-               "screenWindowWidth", "tile_width", "tile_height", "Software"}  # fmt: skip
+               "screenWindowWidth", "tile_width", "tile_height", "Software", "textureformat"}  # fmt: skip
 _KEEP_NAMES = {"oiio:ColorSpace"}
 
 
@@ -68,7 +69,11 @@ def read_image(path: str | os.PathLike, level: int = 0):
         raise ImageIOError(f"input file not found: {path}")
     if os.path.isdir(path):
         raise ImageIOError(f"input is a directory, not an image: {path}")
-    inp = oiio.ImageInput.open(path)
+    # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
+    # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)
+    inp = oiio.ImageInput.open(path, config)
     if inp is None:
         raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
     try:
@@ -87,13 +92,56 @@ def read_image(path: str | os.PathLike, level: int = 0):
     return np.ascontiguousarray(pixels), channels, metadata, pixel_type
 
 
+def read_header(path: str | os.PathLike, level: int = 0):
+    """Read one image file's header without its pixels.
+
+    Returns
+    -------
+    width, height, channel names, metadata dict (of MIP level ``level``)
+    """
+    oiio = _oiio()
+    path = os.fspath(path)
+    if not os.path.isfile(path):
+        raise ImageIOError(f"input file not found: {path}")
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
+    try:
+        if level and not inp.seek_subimage(0, level):
+            raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
+        spec = inp.spec()
+        metadata = {attr.name: attr.value for attr in spec.extra_attribs}
+        return spec.width, spec.height, tuple(spec.channelnames), metadata
+    finally:
+        inp.close()
+
+
+def read_pixel_type(path: str | os.PathLike) -> str:
+    """Pixel type of one image file (``half``, ``float``, ``uint8``...), from its header only."""
+    oiio = _oiio()
+    path = os.fspath(path)
+    inp = oiio.ImageInput.open(path) if os.path.isfile(path) else None
+    if inp is None:
+        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
+    try:
+        return str(inp.spec().format)
+    finally:
+        inp.close()
+
+
 def _first_line(message: str) -> str:
     message = (message or "unknown error").strip()
     return message.splitlines()[0] if message else "unknown error"
 
 
-def read(path: str | os.PathLike, layout: str | None = None, level: int = 0) -> EnvMap:
-    """Read an environment map.
+def read(
+    path: str | os.PathLike,
+    layout: str | None = None,
+    level: int = 0,
+    input_colorspace: str | None = None,
+    ocio_config: str | os.PathLike | None = None,
+) -> EnvMap:
+    """Read an environment map, in scene-linear float32 (linear Rec.709).
 
     Parameters
     ----------
@@ -103,10 +151,22 @@ def read(path: str | os.PathLike, layout: str | None = None, level: int = 0) -> 
         Layout name (``--from``); detected from metadata or the aspect ratio when omitted.
     level : int
         MIP level to read (0, the full resolution, by default).
+    input_colorspace : str, optional
+        Colour space of the file's pixels (an OCIO name or alias); default its
+        ``oiio:ColorSpace``, else linear for float/half and sRGB for 8/16-bit data.
+    ocio_config : str or path, optional
+        OpenColorIO config; default ``$OCIO``, else ``ocio://default``.
+
+    Pixels are converted to linear Rec.709 by :func:`envconv.colorflow.to_working`. A
+    lat-long stored with edge-aligned samples (``oiio:sampleborder``, as OpenEXR envmaps
+    written by other tools) is resampled onto pixel centres
+    (:func:`envconv.colorflow.resample_edge_aligned`).
     """
+    from .colorflow import to_working
+
     path = os.fspath(path)
     if "{face}" in path:
-        return _read_multi(path, layout, level)
+        return to_working(_read_multi(path, layout, level), input_colorspace, ocio_config)
     if layout is not None and get_layout(layout).multi_file:
         raise LayoutError(f"layout {layout} is stored as several files; put {{face}} in the path")
     pixels, channels, metadata, pixel_type = read_image(path, level)
@@ -118,10 +178,16 @@ def read(path: str | os.PathLike, layout: str | None = None, level: int = 0) -> 
         found = get_layout(layout)
         if metadata.get("envconv:layout") != found.name:
             guard = 0
-    if guard:
-        guard = guard // (1 << level) if level else guard
+    guard >>= level + int(metadata.get("envconv:level", 0) or 0)  # a level's guard is G >> k
     found.size_from_image(width, height, guard)
-    return EnvMap(pixels, found, guard, channels, _content_metadata(metadata), pixel_type)
+    if found.name == "latlong" and metadata.get("oiio:sampleborder") and (
+        "envconv:layout" not in metadata  # envconv's own files use pixel centres
+    ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see colorflow.resample_edge_aligned
+        from .colorflow import resample_edge_aligned
+
+        pixels = resample_edge_aligned(pixels)
+    envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata), pixel_type)
+    return to_working(envmap, input_colorspace, ocio_config)
 
 
 def _read_multi(template: str, layout: str | None, level: int) -> EnvMap:
@@ -141,9 +207,35 @@ def _read_multi(template: str, layout: str | None, level: int) -> EnvMap:
     guard = int(metadata.get("envconv:guard", 0) or 0)
     if metadata.get("envconv:layout") != found.name:
         guard = 0
+    guard >>= level + int(metadata.get("envconv:level", 0) or 0)
     mosaic = np.concatenate([p[0] for p in parts], axis=1)
     found.size_from_image(mosaic.shape[1], mosaic.shape[0], guard)
     return EnvMap(mosaic, found, guard, channels, _content_metadata(metadata), pixel_type)
+
+
+def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
+    """(width, height) of every MIP level of an image file (one entry if it has no chain).
+
+    Multi-file layouts (``{face}`` in the path) report the levels of their first file.
+    """
+    oiio = _oiio()
+    path = os.fspath(path)
+    if "{face}" in path:
+        first = _part_path(path, "px")
+        path = first if os.path.exists(first) else _part_path(path, "front")
+    if not os.path.isfile(path):
+        raise ImageIOError(f"input file not found: {path}")
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
+    try:
+        sizes = []
+        while inp.seek_subimage(0, len(sizes)):
+            spec = inp.spec()
+            sizes.append((spec.width, spec.height))
+        return sizes
+    finally:
+        inp.close()
 
 
 def _part_path(template: str, face: str) -> str:
@@ -158,10 +250,20 @@ def _content_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def output_paths(envmap_layout, path: str | os.PathLike) -> list[str]:
-    """Files that writing a map of this layout to ``path`` produces."""
-    layout = get_layout(envmap_layout)
+def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1) -> list[str]:
+    """Files that writing a map of this layout to ``path`` produces.
+
+    With ``{level}`` in the path every one of ``levels`` mip levels is a file of its own
+    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``.
+    """
     path = os.fspath(path)
+    if "{level}" in path:
+        return [
+            p
+            for k in range(max(int(levels), 1))
+            for p in output_paths(envmap_layout, path.replace("{level}", str(k)))
+        ]
+    layout = get_layout(envmap_layout)
     if layout.multi_file:
         if "{face}" not in path:
             raise LayoutError(
@@ -186,7 +288,10 @@ def _format_of(path: str):
     return FORMATS[ext]
 
 
-def _choose_type(path: str, pixel_type: str, bit_depth: str | None) -> str:
+def choose_pixel_type(path: str, pixel_type: str, bit_depth: str | None) -> str:
+    """Pixel type written to ``path``: ``bit_depth``, else the source's if the format stores
+    it, else the format's default for float sources (``FORMATS``), else half (from uint8) or
+    float. Raises ImageIOError when the format cannot store ``bit_depth``."""
     fmt, allowed, default, _ = _format_of(path)
     if bit_depth is not None:
         if bit_depth not in allowed:
@@ -204,31 +309,53 @@ def write(
     path: str | os.PathLike,
     bit_depth: str | None = None,
     compression: str | None = None,
+    output_colorspace: str | None = None,
+    dither: bool = True,
+    ocio_config: str | os.PathLike | None = None,
+    warnings: list[str] | None = None,
 ) -> list[str]:
     """Write ``envmap`` to ``path`` (one file, or one per face with ``{face}``).
 
     The pixel type defaults to the source's where the format allows it (see ``FORMATS``).
+    Colour is converted from the map's ``oiio:ColorSpace`` to ``output_colorspace`` (default:
+    linear Rec.709 for float/half, sRGB for integer types), then clipped and quantized, 8-bit
+    with deterministic dither unless ``dither=False``; ``compression`` is checked against
+    :data:`envconv.colorflow.COMPRESSIONS` (see :func:`envconv.colorflow.encode_output`).
+    Clipping warnings are appended to ``warnings`` when it is a list, else logged.
     Metadata is carried over, plus ``envconv:layout``, ``envconv:size``, ``envconv:guard``,
     ``envconv:version`` and, for unguarded latlong and cube-exr EXRs, OpenEXR's ``envmap``.
-    Returns the paths written.
+    A map with a mip chain (``envmap.levels``) is written as one MIP-mapped file (EXR: tiled
+    MIPMAP_LEVELS, ROUND_DOWN, every level down to 1 × 1; TIFF: one directory per level), or
+    as one file per level when the path holds ``{level}`` (any format; each file is tagged
+    ``envconv:level``). Alpha is written unassociated (never premultiplied). Returns the paths
+    written.
     """
-    paths = output_paths(envmap.layout, path)
+    from .colorflow import encode_output
+
+    encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
+                            compression)  # fmt: skip
+    for message in encoded.warnings:
+        if warnings is None:
+            log.warning("%s", message)
+        else:
+            warnings.append(message)
+    levels, bit_depth, compression = encoded.levels, encoded.plan.pixel_type, encoded.plan.compression
+    envmap = replace(envmap, metadata=encoded.metadata, levels=None)
+    per_level = "{level}" in os.fspath(path)
+    paths = output_paths(envmap.layout, path, len(levels) if per_level else 1)
     layout = envmap.layout
-    if layout.multi_file:
-        cw, ch = layout.cell_size(envmap.size, envmap.guard)
-        images = []
-        for cell in layout.cells:
-            x0, y0 = cell.col * cw, cell.row * ch
-            images.append(envmap.pixels[y0 : y0 + ch, x0 : x0 + cw])
-        faces = list(layout.face_names)
+    faces = list(layout.face_names) if layout.multi_file else [None]
+    cells = [_cells(layout, level) for level in levels]
+    if per_level:
+        jobs = [([cells[k][f]], k, faces[f]) for k in range(len(levels)) for f in range(len(faces))]
     else:
-        images, faces = [envmap.pixels], [None]
+        jobs = [([cell[f] for cell in cells], None, faces[f]) for f in range(len(faces))]
     temps: list[tuple[str, str]] = []
     try:
-        for target, pixels, face in zip(paths, images, faces, strict=True):
+        for target, (images, level, face) in zip(paths, jobs, strict=True):
             temp = _temp_path(target)
             temps.append((temp, target))
-            _write_one(temp, target, pixels, envmap, face, bit_depth, compression)
+            _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
         for temp, target in temps:
             os.replace(temp, target)
     finally:
@@ -236,6 +363,14 @@ def write(
             if os.path.exists(temp):
                 os.remove(temp)
     return paths
+
+
+def _cells(layout, pixels: np.ndarray) -> list[np.ndarray]:
+    """The per-file images of one level: the whole image, or each cell of a multi-file map."""
+    if not layout.multi_file:
+        return [pixels]
+    cw, ch = pixels.shape[1] // layout.columns, pixels.shape[0] // layout.rows
+    return [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
 
 
 def _temp_path(target: str) -> str:
@@ -246,10 +381,66 @@ def _temp_path(target: str) -> str:
     return os.path.join(directory, f".{stem}.envconv-{os.getpid()}.tmp{ext}")
 
 
-def _write_one(temp, target, pixels, envmap: EnvMap, face, bit_depth, compression) -> None:
+def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
+    """Write one file: ``images`` holds one image, or the levels of a MIP-mapped file."""
+    oiio = _oiio()
+    fmt = _format_of(target)[0]
+    if len(images) > 1:
+        full = max(images[0].shape[:2]).bit_length()
+        if fmt not in ("openexr", "tiff"):
+            raise ImageIOError(
+                f"cannot write {target}: {fmt} holds one image, not {len(images)} MIP levels; "
+                "put {level} in the output path for one file per level, e.g. sky_{level}.png"
+            )
+        if fmt == "openexr" and len(images) != full:
+            raise ImageIOError(
+                f"cannot write {target}: a MIP-mapped OpenEXR holds all {full} levels down to "
+                f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
+            )
+    out = oiio.ImageOutput.create(temp)
+    if out is None:
+        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
+    try:
+        for k, pixels in enumerate(images):
+            spec, data = _level_spec(target, pixels, envmap, face, bit_depth, compression)
+            if level is not None:
+                spec.attribute("envconv:level", _int_tag(fmt, level))
+            mode = "Create"
+            if len(images) > 1:
+                _set_mip_attributes(spec, fmt)
+                mode = "Create" if k == 0 else "AppendMIPLevel" if fmt == "openexr" else "AppendSubimage"
+            if not out.open(temp, spec, mode):
+                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+            if not out.write_image(data):
+                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+    finally:
+        ok = out.close()
+        message = out.geterror()
+        del out  # release (and flush) the file before it is renamed into place
+        if not ok:
+            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+
+
+def _int_tag(fmt: str, value: int):
+    """An integer tag as the format can keep it: PNG and JPEG keep only text attributes."""
+    return str(int(value)) if fmt in ("png", "jpeg") else int(value)
+
+
+def _set_mip_attributes(spec, fmt: str) -> None:
+    """Tiled MIP-map attributes: EXR MIPMAP_LEVELS with ROUND_DOWN, TIFF MIP directories."""
+    spec.tile_width = spec.tile_height = 64
+    if fmt == "openexr":
+        spec.attribute("openexr:levelmode", 1)  # MIPMAP_LEVELS
+        spec.attribute("openexr:roundingmode", 0)  # ROUND_DOWN
+    if not spec.get_string_attribute("textureformat"):
+        spec.attribute("textureformat", "Plain Texture")
+
+
+def _level_spec(target, pixels, envmap: EnvMap, face, bit_depth, compression):
+    """(ImageSpec, float32 data) of one image of ``envmap`` written to ``target``."""
     oiio = _oiio()
     fmt, _, _, max_channels = _format_of(target)
-    pixel_type = _choose_type(target, envmap.pixel_type, bit_depth)
+    pixel_type = choose_pixel_type(target, envmap.pixel_type, bit_depth)
     channels = list(envmap.channels)
     if max_channels is not None and len(channels) > max_channels:
         log.warning(
@@ -268,40 +459,35 @@ def _write_one(temp, target, pixels, envmap: EnvMap, face, bit_depth, compressio
     spec.channelnames = tuple(channels)
     if envmap.alpha_index is not None and envmap.alpha_index < nch:
         spec.alpha_channel = envmap.alpha_index
+        if fmt in ("png", "tiff"):
+            # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
+            # mark it premultiplied (TIFF). envconv's alpha is a validity mask.
+            spec.attribute("oiio:UnassociatedAlpha", 1)
     for name, value in envmap.metadata.items():
         _set_attribute(spec, name, value)
     _set_envconv_tags(spec, envmap, fmt, face)
     if compression is not None:
         spec.attribute("compression", compression)
-    out = oiio.ImageOutput.create(temp)
-    if out is None:
-        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
-    try:
-        if not out.open(temp, spec):
-            raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-        data = np.ascontiguousarray(pixels, np.float32)
-        if not out.write_image(data):
-            raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-    finally:
-        if not out.close():
-            raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+    return spec, np.ascontiguousarray(pixels)  # codes/half/float from colorflow.encode_output
 
 
 def _set_envconv_tags(spec, envmap: EnvMap, fmt: str, face: str | None) -> None:
     from . import __version__
 
     spec.attribute("envconv:layout", envmap.layout.name)
-    spec.attribute("envconv:size", int(envmap.size))
-    spec.attribute("envconv:guard", int(envmap.guard))
+    spec.attribute("envconv:size", _int_tag(fmt, envmap.size))
+    spec.attribute("envconv:guard", _int_tag(fmt, envmap.guard))
     spec.attribute("envconv:version", __version__)
     spec.attribute("Software", f"envconv {__version__}")
     if face is not None:
         spec.attribute("envconv:face", face)
     if fmt == "openexr" and envmap.guard == 0:
+        # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
+        # "envmap" string would be stored with the wrong type and make the file unreadable.
         if envmap.layout.name == "latlong":
-            spec.attribute("envmap", "latlong")
+            spec.attribute("textureformat", "LatLong Environment")
         elif envmap.layout.name == "cube-exr":
-            spec.attribute("envmap", "cube")
+            spec.attribute("textureformat", "CubeFace Environment")
 
 
 def _set_attribute(spec, name: str, value: Any) -> None:

@@ -1,0 +1,339 @@
+"""envconv.read / envconv.write and layout detection: formats, channels, tags, files."""
+
+from __future__ import annotations
+
+import os
+
+import analytic
+import naive
+import numpy as np
+import pytest
+from conftest import file_state, write_plain
+
+import envconv
+from envconv.api import convert_file
+from envconv.detect import detect_layout
+from envconv.errors import ImageIOError, LayoutError
+from envconv.io import read_image
+
+# ---------------------------------------------------------------------------------------------
+# Round trips per format
+
+
+def _ramp(height, width, channels, hdr):
+    """A smooth test image; HDR values (up to ~1000) for float formats, [0, 1] otherwise."""
+    y, x = np.mgrid[0:height, 0:width]
+    t = (x + 0.37 * y) / (width + 0.37 * height)
+    planes = [t ** (1 + 0.4 * c) * (1 - 0.3 * (y / height)) for c in range(channels)]
+    pixels = np.stack(planes, -1).astype(np.float32)
+    return pixels * 1000.0 + 0.001 if hdr else pixels
+
+
+# (extension, bit depth, channel counts, hdr data, check(result, original))
+def _rel(tol):
+    return lambda got, want: np.testing.assert_allclose(got, want, rtol=tol, atol=0)
+
+
+def _abs(tol):
+    return lambda got, want: np.testing.assert_allclose(got, want, rtol=0, atol=tol)
+
+
+def _rgbe(got, want):
+    # RGBE shares one exponent per pixel: error ≤ 2⁻⁸ of the pixel's largest channel.
+    bound = want.max(axis=-1, keepdims=True) / 128.0
+    assert np.all(np.abs(got - want) <= bound)
+
+
+FORMATS = [
+    (".exr", "float", (1, 3, 4, 5), True, _abs(0.0)),
+    (".exr", "half", (1, 3, 4, 5), True, _rel(1e-3)),
+    (".hdr", None, (3,), True, _rgbe),
+    (".tif", "float", (1, 3, 4, 5), True, _abs(0.0)),
+    (".tif", "uint16", (1, 3, 4, 5), False, _abs(2e-4)),
+    (".tif", "uint8", (1, 3, 4), False, _abs(0.02)),
+    (".png", "uint16", (1, 3, 4), False, _abs(2e-4)),
+    (".png", "uint8", (1, 3, 4), False, _abs(0.02)),
+    (".jpg", "uint8", (1, 3), False, _abs(0.05)),
+]
+CASES = [
+    pytest.param(ext, depth, nch, hdr, check, id=f"{ext[1:]}-{depth}-{nch}ch")
+    for ext, depth, counts, hdr, check in FORMATS
+    for nch in counts
+]
+
+
+@pytest.mark.parametrize("ext, depth, nch, hdr, check", CASES)
+def test_write_read_round_trip(tmp_path, ext, depth, nch, hdr, check):
+    pixels = _ramp(16, 32, nch, hdr)
+    path = tmp_path / f"map{ext}"
+    written = envconv.write(envconv.EnvMap(pixels, "latlong"), path, bit_depth=depth)
+    assert [os.fspath(p) for p in written] == [os.fspath(path)]
+    back = envconv.read(path)
+    assert back.pixels.dtype == np.float32
+    assert back.pixels.shape == pixels.shape  # channel count kept
+    assert back.layout.name == "latlong"
+    check(back.pixels, pixels)
+    if ext == ".exr":
+        assert back.pixel_type == depth
+
+
+@pytest.mark.parametrize("ext, keeps", [(".hdr", 3), (".jpg", 3), (".png", 4)])
+def test_formats_with_fewer_channels_keep_the_first_ones(tmp_path, ext, keeps):
+    pixels = _ramp(8, 16, 5, False)
+    envconv.write(envconv.EnvMap(pixels, "latlong"), tmp_path / f"m{ext}")
+    back = envconv.read(tmp_path / f"m{ext}")
+    assert back.pixels.shape[2] == keeps
+    np.testing.assert_allclose(back.pixels[..., :3], pixels[..., :3], atol=0.05)
+
+
+def test_half_exr_keeps_hdr_range(tmp_path):
+    pixels = np.full((8, 16, 3), 0.5, np.float32)
+    pixels[3, 4] = [30000.0, 1e-3, 0.0]
+    envconv.write(envconv.EnvMap(pixels, "latlong"), tmp_path / "h.exr", bit_depth="half")
+    back = envconv.read(tmp_path / "h.exr").pixels
+    np.testing.assert_allclose(back, pixels, rtol=1e-3, atol=1e-6)
+
+
+# ---------------------------------------------------------------------------------------------
+# Metadata and detection through files
+
+
+@pytest.mark.parametrize("name, envmap", [("latlong", "ENVMAP_LATLONG"), ("cube-exr", "ENVMAP_CUBE")])
+def test_exr_envmap_attribute(tmp_path, name, envmap):
+    import OpenEXR
+
+    width, height = envconv.layouts.get_layout(name).image_size(8)
+    envconv.write(envconv.EnvMap(np.ones((height, width, 3)), name), tmp_path / "m.exr")
+    header = OpenEXR.File(os.fspath(tmp_path / "m.exr")).header()  # the file itself, not OIIO
+    assert header["envmap"] == getattr(OpenEXR.Envmap, envmap)
+    _, _, metadata, _ = read_image(tmp_path / "m.exr")
+    assert metadata["envconv:layout"] == name
+    assert envconv.read(tmp_path / "m.exr").layout.name == name
+
+
+@pytest.mark.parametrize("name", ["sphere", "angular", "cube-vstrip", "paraboloid", "tennisball"])
+def test_layout_tag_is_read_back_for_ambiguous_aspects(tmp_path, name):
+    import OpenEXR
+
+    width, height = envconv.layouts.get_layout(name).image_size(8)
+    envconv.write(envconv.EnvMap(np.ones((height, width, 3)), name), tmp_path / "m.exr")
+    _, _, metadata, _ = read_image(tmp_path / "m.exr")
+    assert metadata["envconv:layout"] == name
+    assert "envmap" not in OpenEXR.File(os.fspath(tmp_path / "m.exr")).header()
+    back = envconv.read(tmp_path / "m.exr")
+    assert back.layout.name == name and back.size == 8
+
+
+@pytest.mark.parametrize(
+    "value, name", [("LatLong Environment", "latlong"), ("CubeFace Environment", "cube-exr")]
+)
+def test_openexr_envmap_attribute_alone_is_enough(tmp_path, value, name):
+    """A file from another tool: OpenEXR's envmap attribute but no envconv tag.
+
+    OpenImageIO writes (and reports) the EXR ``envmap`` attribute as ``textureformat``.
+    """
+    import OpenEXR
+
+    width, height = envconv.layouts.get_layout(name).image_size(8)
+    write_plain(tmp_path / "m.exr", np.ones((height, width, 3)), {"textureformat": value})
+    assert "envmap" in OpenEXR.File(os.fspath(tmp_path / "m.exr")).header()
+    assert envconv.read(tmp_path / "m.exr").layout.name == name
+
+
+def test_metadata_is_carried_to_the_output(tmp_path):
+    env = envconv.EnvMap(np.ones((8, 16, 3)), "latlong", metadata={"Copyright": "CC0 test"})
+    envconv.write(env, tmp_path / "a.exr")
+    result = envconv.convert(envconv.read(tmp_path / "a.exr"), to="cube-vcross", size=4)
+    envconv.write(result, tmp_path / "b.exr")
+    back = envconv.read(tmp_path / "b.exr")
+    assert back.metadata.get("Copyright") == "CC0 test"
+    assert back.layout.name == "cube-vcross"
+
+
+# ---------------------------------------------------------------------------------------------
+# Detection from the aspect ratio
+
+
+@pytest.mark.parametrize(
+    "width, height, name",
+    [(64, 32, "latlong"), (48, 64, "cube-vcross"), (64, 48, "cube-hcross"),
+     (96, 16, "cube-hstrip"), (48, 32, "tennisball")],
+)  # fmt: skip
+def test_unique_aspects_are_detected(tmp_path, width, height, name):
+    pixels = np.full((height, width, 3), 0.25, np.float32)
+    layout, guard = detect_layout(width, height, {}, pixels)
+    assert layout.name == name and guard == 0
+    write_plain(tmp_path / "plain.exr", pixels)
+    assert envconv.read(tmp_path / "plain.exr").layout.name == name
+
+
+@pytest.mark.parametrize(
+    "width, height, candidates",
+    [(32, 32, ("sphere", "angular")), (16, 96, ("cube-vstrip", "cube-exr"))],
+)
+def test_shared_aspects_raise_naming_the_candidates(tmp_path, width, height, candidates):
+    pixels = np.full((height, width, 3), 0.25, np.float32)
+    write_plain(tmp_path / "plain.exr", pixels)
+    for call in (lambda: detect_layout(width, height, {}, pixels),
+                 lambda: envconv.read(tmp_path / "plain.exr")):  # fmt: skip
+        with pytest.raises(LayoutError) as info:
+            call()
+        message = str(info.value)
+        assert all(name in message for name in candidates)
+        assert "--from" in message and "\n" not in message
+    assert envconv.read(tmp_path / "plain.exr", layout=candidates[1]).layout.name == candidates[1]
+
+
+def test_untagged_packed_paraboloid_is_ambiguous(tmp_path):
+    source = envconv.EnvMap(naive.pixel_average("latlong", 16, analytic.radiance, 2), "latlong")
+    packed = envconv.convert(source, to="paraboloid", size=16)
+    write_plain(tmp_path / "para.exr", packed.pixels)
+    with pytest.raises(LayoutError) as info:
+        envconv.read(tmp_path / "para.exr")
+    assert "latlong" in str(info.value) and "paraboloid" in str(info.value)
+    assert envconv.read(tmp_path / "para.exr", layout="paraboloid").layout.name == "paraboloid"
+
+
+def test_normal_two_to_one_is_latlong(tmp_path):
+    pixels = naive.pixel_average("latlong", 16, analytic.radiance, 2)
+    write_plain(tmp_path / "ll.exr", pixels)
+    assert envconv.read(tmp_path / "ll.exr").layout.name == "latlong"
+
+
+def test_unknown_aspect_raises(tmp_path):
+    write_plain(tmp_path / "odd.exr", np.ones((16, 30, 3)))
+    with pytest.raises(LayoutError, match="30x16"):
+        envconv.read(tmp_path / "odd.exr")
+
+
+def test_forced_layout_that_does_not_fit_raises(tmp_path):
+    write_plain(tmp_path / "ll.exr", np.ones((16, 32, 3)))
+    with pytest.raises(LayoutError):
+        envconv.read(tmp_path / "ll.exr", layout="cube-vcross")
+
+
+# ---------------------------------------------------------------------------------------------
+# Multi-file layouts
+
+
+def test_cube_faces_write_six_named_files(tmp_path):
+    n = 16
+    source = envconv.EnvMap(naive.pixel_average("latlong", 32, analytic.smooth_radiance, 2),
+                            "latlong")  # fmt: skip
+    faces = envconv.convert(source, to="cube-faces", size=n)
+    template = os.fspath(tmp_path / "sky_{face}.exr")
+    written = envconv.write(faces, template)
+    names = ["px", "nx", "py", "ny", "pz", "nz"]
+    assert written == [template.replace("{face}", f) for f in names]
+    # GL faces: px holds world −X, nx +X, py +Y, ny −Y, pz +Z, nz −Z (CONVENTIONS.md).
+    centres = {"px": (-1, 0, 0), "nx": (1, 0, 0), "py": (0, 1, 0), "ny": (0, -1, 0),
+               "pz": (0, 0, 1), "nz": (0, 0, -1)}  # fmt: skip
+    for face, direction in centres.items():
+        pixels, _, metadata, _ = read_image(template.replace("{face}", face))
+        assert pixels.shape == (n, n, 3)
+        assert metadata["envconv:face"] == face
+        centre = pixels[n // 2 - 1 : n // 2 + 1, n // 2 - 1 : n // 2 + 1].mean((0, 1))
+        np.testing.assert_allclose(centre, analytic.smooth_radiance(np.array(direction, float)),
+                                   rtol=0.02)  # fmt: skip
+    back = envconv.read(template)
+    assert back.layout.name == "cube-faces"
+    np.testing.assert_array_equal(back.pixels, faces.pixels)
+
+
+def test_paraboloid_split_writes_front_and_back(tmp_path):
+    source = envconv.EnvMap(naive.pixel_average("latlong", 16, analytic.radiance, 2), "latlong")
+    halves = envconv.convert(source, to="paraboloid-split", size=8)
+    template = os.fspath(tmp_path / "env_{face}.exr")
+    assert envconv.write(halves, template) == [
+        template.replace("{face}", "front"),
+        template.replace("{face}", "back"),
+    ]
+    back = envconv.read(template)
+    assert back.layout.name == "paraboloid-split"
+    np.testing.assert_array_equal(back.pixels, halves.pixels)
+
+
+def test_multi_file_path_without_face_raises(tmp_path):
+    env = envconv.EnvMap(np.ones((4, 24, 3)), "cube-faces")
+    with pytest.raises(LayoutError, match="{face}"):
+        envconv.write(env, tmp_path / "sky.exr")
+    assert os.listdir(tmp_path) == []
+
+
+def test_face_in_path_of_single_file_layout_raises(tmp_path):
+    env = envconv.EnvMap(np.ones((4, 8, 3)), "latlong")
+    with pytest.raises(LayoutError):
+        envconv.write(env, tmp_path / "sky_{face}.exr")
+    assert os.listdir(tmp_path) == []
+
+
+# ---------------------------------------------------------------------------------------------
+# Errors, atomic writes, untouched inputs
+
+
+def test_read_errors(tmp_path):
+    with pytest.raises(ImageIOError, match="not found"):
+        envconv.read(tmp_path / "missing.exr")
+    garbage = tmp_path / "garbage.exr"
+    garbage.write_bytes(b"this is not an OpenEXR file\n" * 10)
+    with pytest.raises(ImageIOError):
+        envconv.read(garbage)
+    with pytest.raises(ImageIOError):
+        envconv.read(tmp_path)
+
+
+def test_unknown_extension_raises(tmp_path):
+    with pytest.raises(ImageIOError, match=".xyz"):
+        envconv.write(envconv.EnvMap(np.ones((4, 8, 3)), "latlong"), tmp_path / "m.xyz")
+    assert os.listdir(tmp_path) == []
+
+
+def _fail_on_face(monkeypatch, face_to_fail):
+    """Make envconv.io fail while writing one file, after the real writer produced it."""
+    import envconv.io as io_module
+
+    real = io_module._write_one
+
+    def failing(temp, target, *args, **kwargs):
+        real(temp, target, *args, **kwargs)
+        assert os.path.exists(temp)  # the temporary file really was written
+        if face_to_fail is None or face_to_fail in os.path.basename(target):
+            raise ImageIOError(f"simulated failure writing {target}")
+
+    monkeypatch.setattr(io_module, "_write_one", failing)
+
+
+def test_failed_write_leaves_no_file_and_no_temp(tmp_path, monkeypatch):
+    _fail_on_face(monkeypatch, None)
+    with pytest.raises(ImageIOError):
+        envconv.write(envconv.EnvMap(np.ones((4, 8, 3)), "latlong"), tmp_path / "out.exr")
+    assert os.listdir(tmp_path) == []
+
+
+def test_failed_multi_file_write_leaves_no_part(tmp_path, monkeypatch):
+    _fail_on_face(monkeypatch, "_ny")
+    with pytest.raises(ImageIOError):
+        envconv.write(envconv.EnvMap(np.ones((4, 24, 3)), "cube-faces"), tmp_path / "s_{face}.exr")
+    assert os.listdir(tmp_path) == []
+
+
+def test_failed_write_keeps_an_existing_output(tmp_path, monkeypatch):
+    target = tmp_path / "out.exr"
+    envconv.write(envconv.EnvMap(np.ones((4, 8, 3)), "latlong"), target)
+    before = file_state(target)
+    _fail_on_face(monkeypatch, None)
+    with pytest.raises(ImageIOError):
+        envconv.write(envconv.EnvMap(np.zeros((4, 8, 3)), "latlong"), target)
+    assert file_state(target) == before
+    assert os.listdir(tmp_path) == ["out.exr"]
+
+
+@pytest.mark.parametrize("ext", [".exr", ".hdr", ".png"])
+def test_input_is_never_modified(tmp_path, ext):
+    source = tmp_path / f"in{ext}"
+    envconv.write(envconv.EnvMap(_ramp(16, 32, 3, False), "latlong"), source)
+    before = file_state(source)
+    convert_file(source, tmp_path / "out.exr", resample={"to": "cube-vcross", "size": 8})
+    envconv.read(source)
+    assert file_state(source) == before
+    assert sorted(os.listdir(tmp_path)) == sorted([f"in{ext}", "out.exr"])
