@@ -32,6 +32,11 @@ class EnvMap:
         File metadata (name → value) carried from the input to the output.
     pixel_type : str
         Storage type the pixels came from: ``"half"``, ``"float"``, ``"uint8"`` or ``"uint16"``.
+    levels : list of numpy.ndarray, optional
+        The mip chain, level 0 first: ``levels[k]`` is (H_k, W_k, C) float32 with
+        ``H_k = max(H >> k, 1)``, ``W_k = max(W >> k, 1)`` (per file for multi-file layouts),
+        same channels and the same uv ↔ direction mapping as ``pixels``; ``levels[0]`` is
+        ``pixels``. None when the map has no mip chain (see :mod:`envconv.mips`).
     """
 
     pixels: np.ndarray
@@ -40,6 +45,7 @@ class EnvMap:
     channels: tuple[str, ...] = ()
     metadata: dict[str, Any] = field(default_factory=dict)
     pixel_type: str = "float"
+    levels: list[np.ndarray] | None = None
 
     def __post_init__(self) -> None:
         self.layout = get_layout(self.layout)
@@ -57,6 +63,18 @@ class EnvMap:
             )
         self.channels = tuple(self.channels)
         _ = self.size  # validates that the pixels fit the layout
+        if self.levels is not None:
+            self._check_levels()
+
+    def _check_levels(self) -> None:
+        levels = [np.ascontiguousarray(level, dtype=np.float32) for level in self.levels]
+        if not levels or levels[0].shape != self.pixels.shape:
+            raise LayoutError("levels[0] must have the shape of pixels")
+        for k, level in enumerate(levels[1:], 1):
+            if level.ndim != 3 or level.shape[2] != self.pixels.shape[2]:
+                raise LayoutError(f"mip level {k} has shape {level.shape}; expected (H, W, C)")
+        levels[0] = self.pixels
+        self.levels = levels
 
     @property
     def size(self) -> int:
