@@ -5,7 +5,13 @@ from __future__ import annotations
 import click
 
 from .main import cli
-from .options import read_options, resample_options, split_options, write_options
+from .options import (
+    color_options,
+    read_options,
+    resample_options,
+    split_options,
+    write_options,
+)
 
 __all__ = ["convert_command"]
 
@@ -14,21 +20,49 @@ __all__ = ["convert_command"]
 @click.argument("input_path", metavar="INPUT")
 @click.argument("output_path", metavar="OUTPUT")
 @read_options
+@color_options
 @resample_options
 @write_options
-def convert_command(input_path, output_path, **options):
+@click.option("--dry-run", is_flag=True, help="Print what would be written; write nothing.")
+def convert_command(input_path, output_path, dry_run, **options):
     """Convert INPUT to layout --to and write OUTPUT.
 
-    Multi-file layouts (cube-faces, paraboloid-split) take {face} in the path.
+    Multi-file layouts (cube-faces, paraboloid-split) take {face} in the path. Resampling
+    runs in scene-linear float32: the input is converted from its colour space and the
+    output to --output-colorspace (see docs/color.md). Warnings go to stderr.
 
     \b
     Example:
       envconv convert sky.exr sky_cross.exr --to cube-vcross --size 512
+      envconv convert sky.exr sky.png --to latlong --exposure -1 --dry-run
     """
-    from ..api import convert_file
+    from ..api import convert_file, plan_convert
 
-    read_kw, resample_kw, write_kw = split_options(options)
-    for path in convert_file(
-        input_path, output_path, read=read_kw, resample=resample_kw, write=write_kw
-    ):
+    read_kw, resample_kw, write_kw, color_kw = split_options(options, with_color=True)
+    if dry_run:
+        plan = plan_convert(input_path, output_path, read_kw, resample_kw, write_kw, color_kw)
+        _echo_plan(plan)
+        return
+    warnings: list[str] = []
+    try:
+        paths = convert_file(input_path, output_path, read=read_kw, resample=resample_kw,
+                             write=write_kw, color=color_kw, warnings=warnings)  # fmt: skip
+    finally:
+        for message in warnings:
+            click.echo(f"envconv: warning: {message}", err=True)
+    for path in paths:
         click.echo(path)
+
+
+def _echo_plan(plan: dict) -> None:
+    """The dry-run report: one line per fact, then the files that would be written."""
+    compression = plan["compression"] or "format default"
+    click.echo(f"layout: {plan['layout']}")
+    click.echo(f"size: {plan['size']} ({plan['width']}x{plan['height']} per file, "
+               f"guard {plan['guard']}, {plan['levels']} level(s))")  # fmt: skip
+    click.echo(f"channels: {','.join(plan['channels'])}")
+    click.echo(f"bit depth: {plan['bit_depth']} (compression: {compression})")
+    click.echo(f"colour: {plan['input_colorspace']} -> {plan['working_colorspace']} (working) "
+               f"-> {plan['output_colorspace']}")  # fmt: skip
+    for path in plan["files"]:
+        click.echo(f"would write: {path}")

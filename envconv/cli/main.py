@@ -1,5 +1,11 @@
 """The ``envconv`` command group and the one place where errors become exit codes.
 
+``envconv`` is a chained group: ``envconv read IN resample … write OUT resample … write OUT2``.
+Each command of a chain parses its own arguments up to the next command name (options may
+follow positional arguments, as in ``write out.exr --bit-depth half``); the result callback
+composes the steps (:mod:`envconv.cli.chain`). ``convert``, ``info``, ``layouts`` and ``run``
+are whole commands that cannot be chained with others.
+
 Library errors (:class:`envconv.errors.EnvconvError`) print one line on stderr and exit 1; click
 usage errors exit 2; anything unexpected prints one line and exits 3 (set ``ENVCONV_DEBUG=1``
 for the traceback).
@@ -16,11 +22,89 @@ import click
 from .. import __version__
 from ..errors import EnvconvError
 
-__all__ = ["cli", "main"]
+__all__ = ["cli", "main", "EnvconvCommand", "COMMAND_MODULES"]
+
+#: Modules under envconv.cli that register commands; loaded on first use of the group.
+COMMAND_MODULES = ("convert", "info", "layouts", "chain", "run", "batch", "pattern")
+#: Commands that run on their own and cannot be chained with others.
+STANDALONE = {"convert", "info", "layouts", "run", "pattern"}
+
+
+def _load_commands() -> None:
+    import importlib
+
+    for name in COMMAND_MODULES:
+        importlib.import_module(f"{__package__}.{name}")
+
+
+def _split_chain(command: click.Command, names: set[str], args: list[str]):
+    """Split ``args`` at the first command name that is not an option's value."""
+    takes_value = {}
+    for param in command.params:
+        if isinstance(param, click.Option) and not param.is_flag and not param.count:
+            for opt in (*param.opts, *param.secondary_opts):
+                takes_value[opt] = (param.nargs, getattr(param, "_flag_needs_value", False))
+    index, options_done = 0, False
+    while index < len(args):
+        token = args[index]
+        if token in names:
+            break
+        index += 1
+        if options_done or not token.startswith("-") or len(token) < 2:
+            continue
+        if token == "--":
+            options_done = True
+            continue
+        name = token.split("=", 1)[0] if token.startswith("--") else token[:2]
+        attached = "=" in token if token.startswith("--") else len(token) > 2
+        if name in takes_value and not attached:
+            nargs, optional = takes_value[name]
+            if optional and (index >= len(args) or args[index] in names):
+                continue
+            index += nargs
+    return args[:index], args[index:]
+
+
+class EnvconvCommand(click.Command):
+    """A command that can sit in a chain: its arguments end at the next command name."""
+
+    def make_context(self, info_name, args, parent=None, **extra):
+        group = parent.command if parent is not None else None
+        if isinstance(group, click.Group) and group.chain:
+            head, tail = _split_chain(self, set(group.list_commands(parent)), list(args))
+            extra.update(allow_extra_args=False, allow_interspersed_args=True)
+            ctx = super().make_context(info_name, head, parent=parent, **extra)
+            ctx.args = tail
+            return ctx
+        return super().make_context(info_name, args, parent=parent, **extra)
 
 
 class EnvconvGroup(click.Group):
     """A click group that turns exceptions into one-line errors and exit codes."""
+
+    command_class = EnvconvCommand
+
+    def list_commands(self, ctx):
+        _load_commands()
+        return super().list_commands(ctx)
+
+    def get_command(self, ctx, cmd_name):
+        _load_commands()
+        return super().get_command(ctx, cmd_name)
+
+    def resolve_command(self, ctx, args):
+        name, command, rest = super().resolve_command(ctx, args)
+        if self.chain and command is not None:
+            chain = ctx.meta.setdefault("envconv.chain", [])
+            chain.append(name)
+            alone = [n for n in chain if n in STANDALONE]
+            if alone and len(chain) > 1:
+                raise click.UsageError(
+                    f"'{alone[0]}' runs on its own; it cannot be chained with other "
+                    f"commands (found: {' '.join(chain)})",
+                    ctx=ctx,
+                )
+        return name, command, rest
 
     def invoke(self, ctx):
         try:
@@ -44,23 +128,40 @@ class EnvconvGroup(click.Group):
             ctx.exit(3)
 
 
-@click.group(cls=EnvconvGroup, context_settings={"help_option_names": ["-h", "--help"]})
+@click.group(
+    cls=EnvconvGroup, chain=True, context_settings={"help_option_names": ["-h", "--help"]}
+)
 @click.version_option(__version__, prog_name="envconv")
 @click.option("-v", "--verbose", count=True, help="More log output (-vv for debug).")
 def cli(verbose: int) -> None:
     """Convert HDR environment maps between layouts.
 
     \b
-    Example:
+    Examples:
       envconv convert sky.exr sky_cross.exr --to cube-vcross --size 512
+      envconv read sky.exr resample --to cube-vcross --size 512 write cross.exr \\
+              resample --to paraboloid --size 256 --alpha --guard 2 write para.exr
+
+    Chained steps: read, rotate, exposure, colorspace, resample, write. Each resample starts
+    from the source (the last read and the steps that follow it), never from another output.
     """
     level = logging.WARNING - 10 * min(verbose, 2)
     logging.basicConfig(level=level, format="envconv: %(levelname)s: %(message)s")
 
 
+@cli.result_callback()
+def compose_steps(results, verbose: int) -> None:
+    """Run the steps of a chain (standalone commands return None and have already run)."""
+    steps = [r for r in results if r is not None]
+    if steps:
+        from .chain import run_chain
+
+        run_chain(steps)
+
+
 def main() -> None:
     """Console-script entry point."""
-    from . import convert, info, layouts  # noqa: F401  (registers the commands)
+    _load_commands()
 
     cli.main(prog_name="envconv", standalone_mode=True)
 

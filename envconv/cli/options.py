@@ -2,7 +2,8 @@
 
 Each group is a list of click decorators whose parameter names equal the keyword arguments of
 the library function they are passed to: ``READ`` → :func:`envconv.io.read`, ``RESAMPLE`` →
-:func:`envconv.resample.convert`, ``WRITE`` → :func:`envconv.io.write`. A command splits its
+:func:`envconv.resample.convert`, ``WRITE`` → :func:`envconv.io.write`, ``COLOR`` →
+:func:`envconv.colorflow.prepare_input`. A command splits its
 keyword arguments with :func:`split_options`. Layout choices come from the registry.
 """
 
@@ -18,10 +19,12 @@ __all__ = [
     "read_options",
     "resample_options",
     "write_options",
+    "color_options",
     "split_options",
     "READ",
     "RESAMPLE",
     "WRITE",
+    "COLOR",
 ]
 
 
@@ -55,10 +58,29 @@ def parse_guard(ctx, param, value):
     return number
 
 
+def parse_mips(ctx, param, value):
+    """``--mips`` alone (or ``--mips all``): the full chain; ``--mips K``: K levels."""
+    if value is None:
+        return None
+    if value == "all":
+        return True
+    try:
+        number = int(value)
+    except ValueError:
+        raise click.BadParameter(f"expected a number of levels or nothing, got {value!r}") from None
+    if number < 1:
+        raise click.BadParameter(f"expected at least 1 level, got {number}")
+    return number
+
+
+_OCIO_CONFIG = ("ocio_config", click.option("--ocio-config", "ocio_config", metavar="PATH", help="OpenColorIO config (default: $OCIO, else OCIO's built-in ocio://default)."))
+
 # Each entry: (library keyword, click decorator).
 READ = [
     ("layout", click.option("--from", "layout", type=layout_choice(), help="Input layout (default: detect from metadata or aspect).")),
     ("level", click.option("--level", type=click.IntRange(min=0), default=0, show_default=True, help="MIP level of the input to read.")),
+    ("input_colorspace", click.option("--input-colorspace", "input_colorspace", metavar="NAME", help="OCIO colour space of the input (default: its oiio:ColorSpace, else linear for float, sRGB for 8/16-bit).")),
+    _OCIO_CONFIG,
 ]  # fmt: skip
 
 RESAMPLE = [
@@ -69,15 +91,36 @@ RESAMPLE = [
     ("rotate", click.option("--rotate", metavar="YAW,PITCH,ROLL", help="Rotate the environment, degrees: about +Y, then +X, then +Z (right-hand rule).")),
     ("alpha", click.option("--alpha", is_flag=True, help="Add an alpha channel: each pixel's coverage of the valid region.")),
     ("guard", click.option("--guard", default=None, callback=parse_guard, metavar="G|fill", help="Guard ring of G pixels around every cell, or 'fill' for the whole image.")),
+    ("in_convention", click.option("--in-convention", "in_convention", metavar="NAME|AXES", help="Convention of the tool that made the input: blender, cmft, skylibs, unity, unreal, ffmpeg, openexr, probe-back, probe-forward, or an axis remap like -x,z,y (see docs/conventions.md).")),
+    ("out_convention", click.option("--out-convention", "out_convention", metavar="NAME|AXES", help="Convention of the tool that will read the output (same names as --in-convention).")),
+    ("up", click.option("--up", type=click.Choice(["y", "z"], case_sensitive=False), help="Up axis of the input's world; z turns its +Z into +Y (same as --axes=x,z,-y).")),
+    ("axes", click.option("--axes", metavar="AXES", help="Remap the input's axes by a signed permutation: --axes=-x,z,y makes envconv's (x, y, z) the input's (-x, z, y).")),
+    ("mips", click.option("--mips", is_flag=False, flag_value="all", default=None, callback=parse_mips, metavar="[K]", help="Write a mip chain: alone, every level down to 1x1; --mips K, K levels. EXR/TIFF: one MIP-mapped file; other formats: {level} in the path.")),
 ]  # fmt: skip
 
-WRITE: list = []
+WRITE = [
+    ("bit_depth", click.option("--bit-depth", "bit_depth", type=click.Choice(["half", "float", "uint8", "uint16"]), help="Output pixel type (default: the input's, where the format stores it).")),
+    ("compression", click.option("--compression", metavar="NAME", help="EXR: none rle zips zip piz pxr24 b44 b44a dwaa dwab htj2k32 htj2k256 (zip/zips/dwaa/dwab take :LEVEL); TIFF: none lzw zip packbits.")),
+    ("output_colorspace", click.option("--output-colorspace", "output_colorspace", metavar="NAME", help="OCIO colour space to write (default: linear Rec.709 for float/half, sRGB for 8/16-bit).")),
+    ("dither", click.option("--dither/--no-dither", default=True, show_default=True, help="Dither 8-bit output (deterministic: same input, same file).")),
+    _OCIO_CONFIG,
+]  # fmt: skip
+
+#: Options of :func:`envconv.colorflow.prepare_input` (range and NaN/Inf of the source).
+COLOR = [
+    ("exposure", click.option("--exposure", type=float, default=0.0, metavar="STOPS", help="Scale colour by 2**STOPS before resampling (e.g. -2 to fit HDR into 8 bits).")),
+    ("fix_nonfinite", click.option("--fix-nonfinite", "fix_nonfinite", type=click.Choice(["none", "black", "box3", "error"]), default="none", show_default=True, help="Replace NaN/Inf in the input: with 0, with the mean of finite 3x3 neighbours, or stop.")),
+    ("clamp_negative", click.option("--clamp-negative", "clamp_negative", is_flag=True, help="Set negative input values to 0 (kept by default).")),
+]  # fmt: skip
 
 
 def _apply(group):
     def decorate(fn):
-        for _, decorator in reversed(group):
-            fn = decorator(fn)
+        # An option shared by two groups (--ocio-config) is added once per command.
+        have = {p.name for p in getattr(fn, "__click_params__", [])}
+        for name, decorator in reversed(group):
+            if name not in have:
+                fn = decorator(fn)
         return fn
 
     return decorate
@@ -86,9 +129,16 @@ def _apply(group):
 read_options = _apply(READ)
 resample_options = _apply(RESAMPLE)
 write_options = _apply(WRITE)
+color_options = _apply(COLOR)
 
 
-def split_options(options: dict) -> tuple[dict, dict, dict]:
-    """Split a command's keyword arguments into (read, resample, write) keyword dicts."""
-    groups = ({k for k, _ in READ}, {k for k, _ in RESAMPLE}, {k for k, _ in WRITE})
-    return tuple({k: v for k, v in options.items() if k in names} for names in groups)  # type: ignore[return-value]
+def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
+    """Split a command's keyword arguments into (read, resample, write) keyword dicts.
+
+    With ``with_color=True`` a fourth dict holds the ``COLOR`` options (for
+    :func:`envconv.colorflow.prepare_input`). A name in two groups goes to both.
+    """
+    groups = [{k for k, _ in READ}, {k for k, _ in RESAMPLE}, {k for k, _ in WRITE}]
+    if with_color:
+        groups.append({k for k, _ in COLOR})
+    return tuple({k: v for k, v in options.items() if k in names} for names in groups)

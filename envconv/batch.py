@@ -1,0 +1,317 @@
+"""Batch conversion: one pipeline recipe run over many inputs, locally or on a Dask cluster.
+
+Each input is one *job*: the recipe (:class:`envconv.pipeline.Pipeline`) bound to that file. A
+job never raises: it returns a record ``{"input", "status", "outputs", "seconds", "error"}``
+with status ``done``, ``skipped`` or ``failed``, so one bad file never stops the batch.
+
+Engines
+-------
+* ``jobs=1``: in this process; numba uses every core.
+* ``jobs=N``: N worker processes (``spawn``), each limited to ``cores // N`` numba threads so
+  the cores are not oversubscribed. Start-up (imports, loading the cached kernels) is paid once
+  per worker, not once per file.
+* ``dask="tcp://host:8786"``: the same jobs submitted to a ``dask.distributed`` scheduler
+  (``pip install 'envconv[dask]'``). Workers need envconv installed and the files on a shared
+  path; input and output paths are made absolute before the jobs leave this machine.
+
+Modes: ``"all"`` redoes everything; ``"skip-existing"`` skips a job whose outputs all exist;
+``"update"`` (like ``maketx -u``) redoes a job only when an output is missing or older than
+its input.
+"""
+
+from __future__ import annotations
+
+import glob
+import logging
+import os
+import time
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass, field
+from typing import Any
+
+from .errors import EnvconvError, ImageIOError, UsageError
+from .io import FORMATS
+from .pipeline import Pipeline, Read, Resample, Write, path_variables
+
+__all__ = [
+    "Job", "BatchResult", "MODES", "expand_inputs", "make_jobs", "run_job", "run_batch",
+    "report_data", "write_report", "worker_threads",
+]  # fmt: skip
+
+log = logging.getLogger(__name__)
+
+MODES = ("all", "skip-existing", "update")
+_GLOB_CHARS = set("*?[")
+
+
+@dataclass(frozen=True)
+class Job:
+    """One unit of batch work: a pipeline and the input it runs on (None: it reads its own)."""
+
+    input: str | None
+    pipeline: Pipeline
+
+    @property
+    def name(self) -> str:
+        if self.input is not None:
+            return self.input
+        reads = [s.params["path"] for s in self.pipeline.steps if isinstance(s, Read)]
+        return reads[0] if reads else "<pipeline>"
+
+
+@dataclass
+class BatchResult:
+    """Records in job order, and the wall time of the whole batch in seconds."""
+
+    records: list[dict[str, Any]]
+    seconds: float = 0.0
+    counts: dict[str, int] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        self.counts = {s: sum(r["status"] == s for r in self.records)
+                       for s in ("done", "skipped", "failed")}  # fmt: skip
+
+    @property
+    def ok(self) -> bool:
+        return self.counts["failed"] == 0
+
+
+def expand_inputs(patterns: Iterable[str]) -> list[str]:
+    """Absolute, sorted, de-duplicated input files from paths, globs and directories.
+
+    A directory contributes its image files (by extension, not recursive). A glob or directory
+    that yields nothing, or a plain path that does not exist, is an error before any work.
+    """
+    found: dict[str, None] = {}
+    for pattern in patterns:
+        pattern = os.fspath(pattern)
+        if os.path.isdir(pattern):
+            names = sorted(n for n in os.listdir(pattern)
+                           if os.path.splitext(n)[1].lower() in FORMATS)  # fmt: skip
+            matches = [os.path.join(pattern, n) for n in names]
+        elif "{face}" in pattern or not (_GLOB_CHARS & set(pattern)):
+            if "{face}" not in pattern and not os.path.exists(pattern):
+                raise ImageIOError(f"input not found: {pattern}")
+            matches = [pattern]
+        else:
+            matches = sorted(p for p in glob.glob(pattern, recursive=True) if os.path.isfile(p))
+        if not matches:
+            raise ImageIOError(f"no input files match {pattern}")
+        for match in matches:
+            found[os.path.abspath(match)] = None
+    return list(found)
+
+
+def make_jobs(inputs: Iterable[str | None], pipeline: Pipeline) -> list[Job]:
+    """One job per input, with relative write paths made absolute against the current
+    directory; raise UsageError when two jobs would write the same file."""
+    steps = [_absolute_write(s) for s in pipeline.steps]
+    rebased = Pipeline(steps, pipeline.variables)
+    jobs = [Job(None if i is None else os.path.abspath(i), rebased) for i in inputs]
+    seen: dict[str, str] = {}
+    for job in jobs:
+        for path in _static_outputs(job):
+            if path in seen and seen[path] != job.name:
+                raise UsageError(f"{seen[path]} and {job.name} would both write {path}; "
+                                 "put {stem} or {dir} in the output path")  # fmt: skip
+            seen[path] = job.name
+    return jobs
+
+
+def _absolute_write(step):
+    if isinstance(step, Write) and step.params["base"] is None:
+        return Write(**{**step.params, "base": os.getcwd()})
+    return step
+
+
+def _static_outputs(job: Job) -> list[str]:
+    """Output paths that follow from names alone (skips those that need a file header)."""
+    out, to, sized, variables = [], None, False, path_variables(job.input)
+    for step in job.pipeline.bound(job.input):
+        if isinstance(step, Read):
+            variables, to = path_variables(step.params["path"]), None
+        elif isinstance(step, Resample):
+            to, sized = step.params["to"], step.params["size"]
+        elif isinstance(step, Write):
+            values = {**variables, **job.pipeline.variables}
+            if to is not None:
+                values["layout"] = to
+            if sized:
+                values["size"] = sized
+            try:
+                out.append(step.target(values))
+            except UsageError:
+                continue
+    return out
+
+
+def worker_threads(jobs: int, cores: int | None = None) -> int:
+    """Numba threads per worker so that ``jobs`` workers share the cores."""
+    if cores is None:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
+    return max(1, (cores or 1) // max(1, jobs))
+
+
+def _init_worker(threads: int) -> None:
+    # OpenImageIO (EXR compression) reads its thread count when first imported.
+    os.environ["OPENIMAGEIO_THREADS"] = str(threads)
+    os.environ["NUMBA_NUM_THREADS"] = str(threads)
+    import numba
+
+    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+
+
+def _input_mtime(job: Job) -> float:
+    times = []
+    for step in job.pipeline.bound(job.input):
+        if isinstance(step, Read) and step.params["path"]:
+            for path in glob.glob(glob.escape(step.params["path"]).replace("{face}", "*")):
+                times.append(os.path.getmtime(path))
+    return max(times) if times else float("inf")
+
+
+def _up_to_date(job: Job, files: list[str], mode: str) -> bool:
+    if not files or not all(os.path.exists(f) for f in files):
+        return False
+    if mode == "skip-existing":
+        return True
+    return min(os.path.getmtime(f) for f in files) >= _input_mtime(job)
+
+
+def run_job(job: Job, mode: str = "all") -> dict[str, Any]:
+    """Run one job and return its record; never raises for a bad input."""
+    start = time.perf_counter()
+    written: list[str] = []
+    record: dict[str, Any] = {"input": job.name, "status": "done", "outputs": written,
+                              "seconds": 0.0, "error": None}  # fmt: skip
+    try:
+        if mode != "all":
+            files = job.pipeline.output_files(job.input)
+            if _up_to_date(job, files, mode):
+                record.update(status="skipped", outputs=files)
+        if record["status"] == "done":
+            job.pipeline.run(job.input, keep=False, written=written)
+    except EnvconvError as exc:
+        record.update(status="failed", error=str(exc))
+    except Exception as exc:  # a batch reports every failure and goes on
+        log.debug("job %s failed", job.name, exc_info=True)
+        record.update(status="failed", error=f"internal error: {type(exc).__name__}: {exc}")
+    record["seconds"] = round(time.perf_counter() - start, 4)
+    return record
+
+
+def _failed(job: Job, exc: BaseException) -> dict[str, Any]:
+    return {"input": job.name, "status": "failed", "outputs": [], "seconds": 0.0,
+            "error": f"{type(exc).__name__}: {exc}"}  # fmt: skip
+
+
+def run_batch(
+    jobs: list[Job],
+    workers: int = 1,
+    mode: str = "all",
+    dask: str | None = None,
+    on_record: Callable[[dict[str, Any]], None] | None = None,
+) -> BatchResult:
+    """Run ``jobs``; call ``on_record`` as each finishes; return records in job order.
+
+    Parameters
+    ----------
+    workers : int
+        Processes on this machine (``-j``); 1 runs in this process.
+    mode : {"all", "skip-existing", "update"}
+    dask : str, optional
+        Address of a Dask scheduler; the jobs then run there and ``workers`` is ignored.
+    """
+    if mode not in MODES:
+        raise UsageError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
+    start = time.perf_counter()
+    records: list[dict[str, Any] | None] = [None] * len(jobs)
+
+    def finish(index: int, record: dict[str, Any]) -> None:
+        records[index] = record
+        if on_record is not None:
+            on_record(record)
+
+    if dask:
+        _run_dask(dask, jobs, mode, finish)
+    elif workers <= 1 or len(jobs) <= 1:
+        for index, job in enumerate(jobs):
+            finish(index, run_job(job, mode))
+    else:
+        _run_processes(jobs, min(workers, len(jobs)), mode, finish)
+    done = [
+        r if r is not None else _failed(j, RuntimeError("not run"))
+        for r, j in zip(records, jobs, strict=True)
+    ]
+    return BatchResult(done, round(time.perf_counter() - start, 4))
+
+
+def _run_processes(jobs: list[Job], workers: int, mode: str, finish) -> None:
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor, as_completed
+
+    threads = worker_threads(workers)
+    context = multiprocessing.get_context("spawn")  # numba's OpenMP layer is not fork-safe
+    with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
+                             initargs=(threads,)) as pool:  # fmt: skip
+        futures = {pool.submit(run_job, job, mode): i for i, job in enumerate(jobs)}
+        try:
+            for future in as_completed(futures):
+                index = futures[future]
+                try:
+                    finish(index, future.result())
+                except Exception as exc:  # a worker died (e.g. out of memory)
+                    finish(index, _failed(jobs[index], exc))
+        except BaseException:
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise
+
+
+def _run_dask(address: str, jobs: list[Job], mode: str, finish) -> None:
+    try:
+        from dask.distributed import Client, as_completed
+    except ImportError:
+        raise UsageError("--dask needs dask.distributed; install it with "
+                         "pip install 'envconv[dask]'") from None  # fmt: skip
+    try:
+        client = Client(address)  # connect timeout: distributed.comm.timeouts.connect
+    except (OSError, TimeoutError, ValueError) as exc:
+        raise EnvconvError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
+    with client:
+        futures = client.map(run_job, jobs, mode=mode, pure=False)
+        index = {future.key: i for i, future in enumerate(futures)}
+        for future in as_completed(futures):
+            i = index[future.key]
+            try:
+                finish(i, future.result())
+            except Exception as exc:  # a worker died
+                finish(i, _failed(jobs[i], exc))
+
+
+def report_data(result: BatchResult) -> dict[str, Any]:
+    """The ``--report`` JSON: a summary and one record per input, in input order."""
+    from . import __version__
+
+    return {
+        "envconv": __version__,
+        "summary": {**result.counts, "total": len(result.records), "seconds": result.seconds},
+        "files": result.records,
+    }
+
+
+def write_report(path: str | os.PathLike, result: BatchResult) -> None:
+    """Write :func:`report_data` as JSON to ``path`` (through a temporary file and a rename)."""
+    import json
+
+    path = os.fspath(path)
+    temp = f"{path}.envconv-{os.getpid()}.tmp"
+    try:
+        with open(temp, "w", encoding="utf-8") as handle:
+            json.dump(report_data(result), handle, indent=2)
+            handle.write("\n")
+        os.replace(temp, path)
+    except OSError as exc:
+        raise ImageIOError(f"cannot write report {path}: {exc.strerror or exc}") from None
+    finally:
+        if os.path.exists(temp):
+            os.remove(temp)

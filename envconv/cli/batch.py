@@ -1,0 +1,152 @@
+"""``envconv batch INPUTS... --out TEMPLATE [STEPS...]``: one recipe over many files.
+
+The steps that follow ``batch`` in the chain are the per-file recipe (a leading ``read`` takes
+no INPUT). ``--out`` supplies the write after every resample when the recipe has no ``write``.
+The batch options are shared with ``envconv run``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import click
+
+from ..batch import expand_inputs, make_jobs, run_batch, write_report
+from ..graph import load_graph
+from ..pipeline import Pipeline, Resample, Write
+from .main import cli
+from .progress import Progress, summary_line
+
+__all__ = ["batch_command", "batch_options", "BatchSpec", "run_batch_command", "execute"]
+
+BATCH_OPTIONS = [
+    click.option("-j", "--jobs", "workers", type=click.IntRange(min=0), default=1, show_default=True, help="Worker processes (0: one per core); numba threads are split between them."),
+    click.option("--skip-existing", is_flag=True, help="Skip an input whose outputs all exist."),
+    click.option("-u", "--update", is_flag=True, help="Redo an input only when an output is missing or older than it."),
+    click.option("--report", "report", metavar="FILE.json", help="Write one JSON record per input (status, outputs, seconds, error)."),
+    click.option("--dask", "dask", metavar="SCHEDULER", help="Run the jobs on a Dask cluster (tcp://host:8786); needs envconv[dask]."),
+    click.option("--dry-run", is_flag=True, help="Print every output (layout, size, levels, files) without reading pixels."),
+]  # fmt: skip
+
+
+def batch_options(fn):
+    for decorator in reversed(BATCH_OPTIONS):
+        fn = decorator(fn)
+    return fn
+
+
+@dataclass
+class BatchSpec:
+    """What ``batch`` was given; the steps after it arrive in the result callback."""
+
+    inputs: tuple[str, ...]
+    out: str | None
+    graph: str | None
+    options: dict[str, Any] = field(default_factory=dict)
+
+
+@cli.command("batch")
+@click.argument("inputs", nargs=-1, metavar="INPUTS...")
+@click.option(
+    "-o",
+    "--out",
+    metavar="TEMPLATE",
+    help="Output path, e.g. 'out/{stem}_{layout}.exr'; written after every resample.",
+)
+@click.option(
+    "--graph",
+    metavar="FILE",
+    help="Take the recipe (and, without INPUTS, the inputs) from a graph file.",
+)
+@batch_options
+def batch_command(inputs, out, graph, **options):
+    """Run the steps that follow on every input (files, globs or directories).
+
+    A bad file never stops the batch; the exit status is 1 if any input failed.
+
+    \b
+    Example:
+      envconv batch 'hdri/*.exr' --out 'out/{stem}_{layout}.exr' -j 2 \\
+              resample --to cube-vcross --size 512 resample --to paraboloid --size 256
+    """
+    return BatchSpec(tuple(inputs), out, graph, options)
+
+
+def _with_out(steps: list, out: str | None) -> list:
+    if out is None:
+        return steps
+    if any(isinstance(s, Write) for s in steps):
+        raise click.UsageError("give either --out or write steps, not both")
+    result = []
+    for step in steps:
+        result.append(step)
+        if isinstance(step, Resample):
+            result.append(Write(out))
+    if not any(isinstance(s, Resample) for s in steps):
+        result.append(Write(out))
+    return result
+
+
+def run_batch_command(spec: BatchSpec, steps: list) -> None:
+    """Build the jobs of a ``batch`` chain and run them."""
+    if spec.graph:
+        if steps:
+            raise click.UsageError("give either --graph or steps after batch, not both")
+        graph = load_graph(spec.graph, recipe=bool(spec.inputs) or None)
+        steps, variables = graph.steps, graph.variables
+        patterns = list(spec.inputs) or graph.inputs
+    else:
+        variables, patterns = {}, list(spec.inputs)
+    if not patterns:
+        raise click.UsageError("batch needs INPUTS: files, globs or directories")
+    steps = _with_out(list(steps), spec.out)
+    if not any(isinstance(s, Write) for s in steps):
+        raise click.UsageError("nothing would be written: give --out or a write step")
+    pipeline = Pipeline(steps, variables)
+    pipeline.validate(input="input.exr", require_writes=True)
+    execute(make_jobs(expand_inputs(patterns), pipeline), **spec.options)
+
+
+def execute(jobs, workers=1, skip_existing=False, update=False, report=None, dask=None,
+            dry_run=False) -> None:  # fmt: skip
+    """Run (or with ``dry_run`` plan) ``jobs`` with progress, summary and report."""
+    if skip_existing and update:
+        raise click.UsageError("--skip-existing and --update exclude each other")
+    if dry_run:
+        _print_plan(jobs)
+        return
+    if workers == 0:
+        from ..batch import worker_threads
+
+        workers = worker_threads(1)
+    mode = "skip-existing" if skip_existing else "update" if update else "all"
+    progress = Progress(len(jobs))
+    try:
+        result = run_batch(jobs, workers=workers, mode=mode, dask=dask, on_record=progress.update)
+    finally:
+        progress.close()
+    if report:
+        write_report(report, result)
+    click.echo(summary_line(result.counts, result.seconds, len(jobs)))
+    if not result.ok:
+        raise click.exceptions.Exit(1)
+
+
+def _print_plan(jobs) -> None:
+    failed = 0
+    for job in jobs:
+        click.echo(job.name)
+        try:
+            outputs = job.pipeline.plan(job.input)
+        except Exception as exc:  # report and go on, like a real run
+            click.echo(f"  error: {exc}")
+            failed += 1
+            continue
+        for o in outputs:
+            levels = f"{o.levels} level{'s' if o.levels > 1 else ''}"
+            click.echo(f"  {o.layout}  N={o.size}  G={o.guard}  {o.width}x{o.height}  {levels}")
+            for path in o.files:
+                click.echo(f"    {path}")
+    if failed:
+        raise click.exceptions.Exit(1)

@@ -1,0 +1,130 @@
+"""Chained steps: ``envconv read IN resample --to L write OUT …``.
+
+Each command returns a step object of :mod:`envconv.pipeline`; the group's result callback
+hands the list to :func:`run_chain`, which validates the whole chain before reading a pixel and
+then runs it (or, after ``batch``, runs it once per input).
+"""
+
+from __future__ import annotations
+
+import click
+
+from ..pipeline import Colorspace, Exposure, Pipeline, Read, Resample, Rotate, Write
+from .main import cli
+from .options import read_options, resample_options, split_options, write_options
+
+__all__ = ["read_step", "rotate_step", "exposure_step", "colorspace_step", "resample_step",
+           "write_step", "run_chain"]  # fmt: skip
+
+# Negative numbers (rotate -90, exposure -1.5) must reach the argument, not the option parser.
+_NUMBERS = {"ignore_unknown_options": True}
+
+
+@cli.command("read")
+@click.argument("input_path", metavar="[INPUT]", required=False)
+@read_options
+def read_step(input_path, **options):
+    """Read INPUT as the source of the steps that follow.
+
+    After `batch` the INPUT is left out: each batch input is read with these options.
+
+    \b
+    Example:
+      envconv read sky.exr --from latlong resample --to cube-vcross write cross.exr
+    """
+    return Read(input_path, **split_options(options)[0])
+
+
+@cli.command("rotate", context_settings=_NUMBERS)
+@click.argument("angles", metavar="[YAW,PITCH,ROLL]", required=False)
+@click.option("--yaw", type=float, help="Degrees about +Y.")
+@click.option("--pitch", type=float, help="Degrees about +X (after yaw).")
+@click.option("--roll", type=float, help="Degrees about +Z (after pitch).")
+def rotate_step(angles, yaw, pitch, roll):
+    """Rotate the source: YAW about +Y, then PITCH about +X, then ROLL about +Z (degrees).
+
+    No pixels are filtered here: the rotation is applied inside each later resample.
+
+    \b
+    Example:
+      envconv read sky.exr rotate -90,0,0 resample --to cube-vcross write cross.exr
+    """
+    given = [a for a in (yaw, pitch, roll) if a is not None]
+    if angles is not None and given:
+        raise click.UsageError("give YAW,PITCH,ROLL or --yaw/--pitch/--roll, not both")
+    if angles is None:
+        return Rotate(yaw=yaw or 0.0, pitch=pitch or 0.0, roll=roll or 0.0)
+    return Rotate(angles)
+
+
+@cli.command("exposure", context_settings=_NUMBERS)
+@click.argument("stops", type=float)
+def exposure_step(stops):
+    """Scale colour (not alpha) by 2**STOPS, on the source or, after a resample, on that output.
+
+    \b
+    Example:
+      envconv read sky.exr exposure -2 resample --to latlong --size 256 write dim.exr
+    """
+    return Exposure(stops)
+
+
+@cli.command("colorspace")
+@click.option("--to", "dst", required=True, help="Colour space to convert to.")
+@click.option("--from", "src", help="Colour space of the data (default: the file's).")
+@click.option("--ocio-config", "config", metavar="PATH", help="OpenColorIO config.")
+def colorspace_step(dst, src, config):
+    """Convert colour through OpenColorIO, on the source or, after a resample, on that output.
+
+    \b
+    Example:
+      envconv read sky.exr resample --to latlong write lin.exr \\
+              resample --to latlong --size 256 colorspace --to sRGB write preview.png
+    """
+    return Colorspace(dst, src=src, config=config)
+
+
+@cli.command("resample")
+@resample_options
+def resample_step(**options):
+    """Resample the source (never a previous output) into layout --to.
+
+    \b
+    Example:
+      envconv read sky.exr resample --to paraboloid --size 256 --alpha --guard 2 write p.exr
+    """
+    return Resample(**split_options(options)[1])
+
+
+@cli.command("write")
+@click.argument("output_path", metavar="OUTPUT")
+@write_options
+def write_step(output_path, **options):
+    """Write the latest resample (or the source) to OUTPUT.
+
+    OUTPUT may use {stem} {name} {ext} {dir} of the input, {layout} and {size} of the output,
+    and {face} for multi-file layouts.
+
+    \b
+    Example:
+      envconv read sky.exr resample --to cube-faces --size 256 write '{stem}_{face}.exr'
+    """
+    return Write(output_path, **split_options(options)[2])
+
+
+def run_chain(steps: list) -> None:
+    """Validate and run a chain of steps; a leading batch spec runs them per input."""
+    from .batch import BatchSpec, run_batch_command
+
+    if isinstance(steps[0], BatchSpec):
+        if any(isinstance(s, BatchSpec) for s in steps[1:]):
+            raise click.UsageError("batch can appear only once, at the start of the chain")
+        run_batch_command(steps[0], steps[1:])
+        return
+    if any(isinstance(s, BatchSpec) for s in steps):
+        raise click.UsageError("batch must come first: envconv batch INPUTS... STEPS...")
+    pipeline = Pipeline(steps)
+    pipeline.validate(require_writes=True)
+    for output in pipeline.run(keep=False):
+        for path in output.files:
+            click.echo(path)

@@ -1,0 +1,30 @@
+"""``envconv run GRAPH``: run a graph file (TOML or JSON), or print its plan."""
+
+from __future__ import annotations
+
+import click
+
+from ..batch import expand_inputs, make_jobs
+from ..graph import load_graph
+from .batch import batch_options, execute
+from .main import cli
+
+__all__ = ["run_command"]
+
+
+@cli.command("run")
+@click.argument("graph_path", metavar="GRAPH")
+@batch_options
+def run_command(graph_path, **options):
+    """Run the pipeline in GRAPH (see docs/pipeline-file.md), once per input it lists.
+
+    The file is validated before any work; --dry-run prints every output (layout, size,
+    levels and files) from the inputs' headers, without reading pixels.
+
+    \b
+    Example:
+      envconv run examples/graph.toml --dry-run
+    """
+    graph = load_graph(graph_path)
+    inputs = expand_inputs(graph.inputs) if graph.inputs else [None]
+    execute(make_jobs(inputs, graph.pipeline), **options)
