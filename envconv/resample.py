@@ -27,9 +27,11 @@ from __future__ import annotations
 
 import logging
 import math
+from dataclasses import replace
 
 import numpy as np
 
+from .conventions import apply_remap, environment_axes, resolve_convention
 from .envmap import EnvMap
 from .errors import LayoutError, UsageError
 from .geometry import horizon_pitch, kernel_geometry
@@ -81,6 +83,11 @@ def convert(
     rotate=None,
     guard: int | str = 0,
     alpha: bool = False,
+    mips: bool | int | None = None,
+    in_convention=None,
+    out_convention=None,
+    up: str | None = None,
+    axes: str | None = None,
 ) -> EnvMap:
     """Resample ``envmap`` into layout ``to``.
 
@@ -103,6 +110,17 @@ def convert(
         of its nearest cell.
     alpha : bool
         Add (or replace) an alpha channel holding each pixel's valid-region coverage.
+    mips : bool or int, optional
+        Also build a mip chain (``EnvMap.levels``): True (or 0) for the full round-down chain
+        down to 1 × 1, K for at most K levels. See :mod:`envconv.mips`.
+    in_convention, out_convention : str or (3, 3) array, optional
+        Convention of the tool that made the input / will read the output: a preset name
+        (``blender``, ``cmft``, ``skylibs``, ``unity``, ``unreal``, ``ffmpeg``, …), an axis
+        remap such as ``"-x,z,y"`` or a matrix. See :mod:`envconv.conventions`.
+    up : {"y", "z"}, optional
+        Up axis of the input's world; ``"z"`` turns its +Z into +Y (same as ``axes="x,z,-y"``).
+    axes : str, optional
+        Signed axis permutation applied to the input's environment, e.g. ``"-x,z,y"``.
 
     Returns
     -------
@@ -120,6 +138,14 @@ def convert(
     from .kernels.resample import resample_rows
 
     to = get_layout(to)
+    cin = resolve_convention(in_convention, envmap.layout)
+    cout = resolve_convention(out_convention, to)
+    if cout.remap is not None and mips:
+        raise UsageError(f"out_convention {cout.name} moves cells; it cannot be used with mips")
+    if cin.remap is not None:
+        envmap = replace(
+            envmap, pixels=apply_remap(envmap.layout, envmap.pixels, envmap.guard, cin.remap)
+        )
     fill = guard == "fill"
     guard_px = 0 if fill else _check_guard(guard)
     if filter not in FILTERS:
@@ -131,7 +157,10 @@ def convert(
     n_samples = _check_samples(samples) or auto_samples(envmap, to, size)
     yaw, pitch, roll = parse_rotation(rotate)
     # Output direction d → source direction Rᵀ d.
-    rot = np.ascontiguousarray(rotation_matrix(yaw, pitch, roll).T)
+    rot = rotation_matrix(yaw, pitch, roll).T
+    # Conventions (envconv.conventions): d_source = M_inᵀ Aᵀ Rᵀ M_out d.
+    rot = cin.matrix.T @ environment_axes(up, axes).T @ rot @ cout.matrix
+    rot = np.ascontiguousarray(rot)
 
     width, height = to.image_size(size, guard_px)
     channels = list(envmap.channels)
@@ -153,13 +182,25 @@ def convert(
         src, *sgeo, dgeo, d_cell_face, d_cell_turns,
         1.0, 1.0, n_samples, FILTERS[filter], rot, fill, out, coverage,
     )  # fmt: skip
+    chain = [(out, coverage)]
+    if mips:
+        from .mips import build_chain, level_count
+
+        count = level_count(to, size, guard_px, mips)
+        chain = build_chain(
+            envmap, to, size, guard_px, fill, n_samples, FILTERS[filter], rot, out, coverage,
+            count,
+        )  # fmt: skip
     if alpha:
         if alpha_index is None:
-            out = np.concatenate([out, coverage[:, :, None]], axis=2)
+            chain = [(np.concatenate([o, c[:, :, None]], axis=2), c) for o, c in chain]
             channels.append("A")
-            alpha_index = len(channels) - 1
         else:
-            out[:, :, alpha_index] = coverage
+            for o, c in chain:
+                o[:, :, alpha_index] = c
+    out = chain[0][0]
+    if cout.remap is not None:
+        out = apply_remap(to, out, guard_px, cout.remap, inverse=True)
     metadata = dict(envmap.metadata)
     return EnvMap(
         out,
@@ -168,6 +209,7 @@ def convert(
         channels=tuple(channels),
         metadata=metadata,
         pixel_type=envmap.pixel_type,
+        levels=[o for o, _ in chain] if mips else None,
     )
 
 
