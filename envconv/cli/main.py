@@ -84,6 +84,27 @@ class EnvconvGroup(click.Group):
 
     command_class = EnvconvCommand
 
+    def main(self, args=None, prog_name=None, complete_var=None, standalone_mode=True, **extra):
+        """Run the group; in standalone mode a usage error is one line on stderr, exit 2."""
+        if not standalone_mode:
+            return super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        try:
+            result = super().main(args, prog_name, complete_var, standalone_mode=False, **extra)
+        except click.exceptions.NoArgsIsHelpError as exc:
+            exc.show()
+            sys.exit(exc.exit_code)
+        except click.ClickException as exc:
+            lines = [line for line in exc.format_message().splitlines() if line.strip()]
+            message = lines[0] if lines else type(exc).__name__
+            ctx = getattr(exc, "ctx", None)
+            hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
+            click.echo(f"envconv: error: {message}{hint}", err=True)
+            sys.exit(exc.exit_code)
+        except click.exceptions.Abort:
+            click.echo("envconv: aborted", err=True)
+            sys.exit(1)
+        sys.exit(result if isinstance(result, int) else 0)
+
     def list_commands(self, ctx):
         _load_commands()
         return super().list_commands(ctx)
@@ -113,6 +134,8 @@ class EnvconvGroup(click.Group):
             click.echo(f"envconv: error: {exc}", err=True)
             ctx.exit(1)
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
+            raise
+        except BrokenPipeError:  # `envconv layouts | head`: click exits quietly
             raise
         except KeyboardInterrupt:
             click.echo("envconv: interrupted", err=True)
