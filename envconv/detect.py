@@ -1,7 +1,8 @@
 """Telling layouts apart: from metadata first, then from the aspect ratio.
 
 Order: the ``envconv:layout`` tag (with ``envconv:guard``), then OpenEXR's ``envmap`` attribute
-(``latlong`` → latlong, ``cube`` → cube-exr), then the aspect ratio. Aspects that only one
+(``latlong`` → latlong, ``cube`` → cube-exr; OpenImageIO reports it as ``textureformat``
+"LatLong Environment" or "CubeFace Environment"), then the aspect ratio. Aspects that only one
 layout has are guessed: 3:4 cube-vcross, 4:3 cube-hcross, 6:1 cube-hstrip, 3:2 tennisball.
 Shared aspects are refused with a message naming the candidates, except 2:1: a 2:1 image is a
 lat-long unless it is black outside two inscribed disks, which is what an untagged packed
@@ -39,9 +40,10 @@ def detect_layout(
         layout = get_layout(tag)
         return layout, guard
     envmap = str(metadata.get("envmap", "")).lower()
-    if envmap == "latlong":
+    texture = str(metadata.get("textureformat", "")).lower()
+    if envmap == "latlong" or texture == "latlong environment":
         return get_layout("latlong"), 0
-    if envmap == "cube":
+    if envmap == "cube" or texture == "cubeface environment":
         return get_layout("cube-exr"), 0
     return _from_aspect(width, height, pixels), 0
 

@@ -62,8 +62,8 @@ def _step_keys() -> dict[str, set[str]]:
         "rotate": {"angles", "yaw", "pitch", "roll"},
         "exposure": {"stops"},
         "colorspace": {"dst", "src", "config"},
-        "resample": {"mips"} | _signature_keys(convert, "envmap"),
-        "write": {"path", "makedirs"} | _signature_keys(io.write, "envmap", "path"),
+        "resample": _signature_keys(convert, "envmap"),
+        "write": {"path", "makedirs"} | _signature_keys(io.write, "envmap", "path", "warnings"),
     }
 
 

@@ -31,7 +31,6 @@ the input last read, ``{layout}`` and ``{size}`` (N) of what is written, and any
 
 from __future__ import annotations
 
-import inspect
 import logging
 import math
 import os
@@ -43,7 +42,6 @@ from . import io
 from .envmap import EnvMap
 from .errors import EnvconvError, UsageError
 from .layouts import get_layout
-from .resample import convert
 from .rotation import parse_rotation, rotation_matrix
 
 __all__ = [
@@ -150,8 +148,6 @@ class Resample(Step):
         if rotate is not None:
             kwargs["rotate"] = rotate
         if self.params["mips"] is not None and self.params["mips"] is not False:
-            if "mips" not in inspect.signature(convert).parameters:
-                raise UsageError("mips: this envconv build cannot make mip chains yet")
             kwargs["mips"] = self.params["mips"]
         return kwargs
 

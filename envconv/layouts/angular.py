@@ -48,9 +48,11 @@ def face_to_dir(face, a, b):
 @jit
 def dir_to_face(x, y, z):
     """(0, a, b) of a direction; -Z lands on the rim at a = 1."""
-    r_xy = math.sqrt(x * x + y * y)
-    rad = math.acos(min(1.0, max(-1.0, z))) / math.pi
-    if r_xy < 1e-300:
+    # atan2 keeps full precision near the centre, where acos(z) loses half the digits, and
+    # hypot keeps it for subnormal components.
+    r_xy = math.hypot(x, y)
+    rad = math.atan2(r_xy, z) / math.pi
+    if r_xy == 0.0:
         if z >= 0.0:
             return 0, 0.0, 0.0
         return 0, 1.0, 0.0
