@@ -13,10 +13,16 @@ size (default)
     where ``k / N`` is a layout's mean pixel pitch (√ of the pixel solid angle) over the horizon
     circle (see :func:`envconv.geometry.horizon_pitch`; k = π for lat-long, ≈1.68 for cubes).
 samples="auto"
-    ``S = clamp(round(r), 1, 32)`` where ``r = pitch_out / pitch_in`` is the ratio of output to
-    source pixel pitch on the horizon. Near 1:1 (r < 1.5) this is one sample per pixel, as sharp
-    as a correct single-tap converter; a 16K → 256 reduction gets enough sub-samples per pixel
-    that each source texel is visited about once, so nothing aliases.
+    Adaptive, per pixel: a pixel whose edge spans ``f`` source pixels there takes
+    ``clamp(ceil(f - 0.2), 1, 32)`` sub-samples along that edge (measured along each axis, so a
+    cube face read from a lat-long's polar rows, or an angular map's rim, gets as many as it
+    needs), so sub-samples are never much more than one source pixel apart and every source
+    texel under the pixel is visited: nothing aliases, and a one-pixel highlight keeps its
+    energy. Near 1:1 this is one sample per pixel, as sharp as a correct single-tap converter.
+    A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
+    With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
+    of output to source pixel pitch on the horizon, so that every level is the exact block
+    average of level 0 (see :mod:`envconv.mips`).
 filter
     ``bilinear`` (default), ``bicubic`` (Catmull-Rom, clamped to the range of the four nearest
     texels so it can never ring past them: no new negatives next to an HDR highlight) or
@@ -154,7 +160,9 @@ def convert(
         size = default_size(envmap, to)
     if not isinstance(size, (int, np.integer)) or size < 1:
         raise LayoutError(f"size must be a positive integer, got {size!r}")
-    n_samples = _check_samples(samples) or auto_samples(envmap, to, size)
+    n_samples = _check_samples(samples)
+    if n_samples is None and mips:
+        n_samples = auto_samples(envmap, to, size)
     yaw, pitch, roll = parse_rotation(rotate)
     # Output direction d → source direction Rᵀ d.
     rot = rotation_matrix(yaw, pitch, roll).T
@@ -171,17 +179,27 @@ def convert(
     sgeo = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
     dgeo, d_cell_face, d_cell_turns, _ = kernel_geometry(to, size, guard_px)
     log.debug(
-        "resample %s -> %s N=%d S=%d filter=%s",
+        "resample %s -> %s N=%d S=%s filter=%s",
         envmap.layout.name,
         to.name,
         size,
-        n_samples,
+        n_samples or "auto",
         filter,
     )
     resample_rows(
         src, *sgeo, dgeo, d_cell_face, d_cell_turns,
-        1.0, 1.0, n_samples, FILTERS[filter], rot, fill, out, coverage,
+        1.0, 1.0, n_samples or 0, FILTERS[filter], rot, fill, out, coverage,
     )  # fmt: skip
+    if (
+        to.name == envmap.layout.name
+        and size == envmap.size
+        and guard_px == envmap.guard
+        and n_samples in (None, 1)
+        and np.array_equal(rot, np.eye(3))
+    ):
+        # Same grid: every sample sits on a source pixel centre, where every filter returns that
+        # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
+        np.copyto(out, src, where=coverage[:, :, None] > 0)
     chain = [(out, coverage)]
     if mips:
         from .mips import build_chain, level_count

@@ -10,7 +10,7 @@ Image points are in level-0 pixels: x right, y down, pixel (i, j) spans [i, i+1)
 
 import math
 
-from .._jit import jit
+from .._jit import jit, jit_inline
 from .geometry import is_disk
 
 __all__ = [
@@ -26,7 +26,7 @@ GEO_FAMILY, GEO_N, GEO_GUARD, GEO_ASPECT, GEO_COLUMNS, GEO_ROWS = 0, 1, 2, 3, 4,
 ON_EDGE = 1e-9  # tolerance of the validity test (rim directions land at R² = 1 + O(1e-16))
 
 
-@jit
+@jit_inline
 def cell_local(geo, cell_turns, cell, px, py):
     """Local (a, b) of image point (px, py) in the frame of ``cell``, continued past it."""
     n, g, aspect, cols = geo[GEO_N], geo[GEO_GUARD], geo[GEO_ASPECT], geo[GEO_COLUMNS]
@@ -41,7 +41,7 @@ def cell_local(geo, cell_turns, cell, px, py):
     return a, b
 
 
-@jit
+@jit_inline
 def locate(geo, cell_face, cell_turns, px, py):
     """(face, a, b, cell) of image point (px, py); face is -1 in an empty cell."""
     n, g, aspect = geo[GEO_N], geo[GEO_GUARD], geo[GEO_ASPECT]
@@ -53,7 +53,7 @@ def locate(geo, cell_face, cell_turns, px, py):
     return cell_face[cell], a, b, cell
 
 
-@jit
+@jit_inline
 def face_to_image(geo, face_cell, cell_turns, face, a, b):
     """Image point (px, py) and cell of local point (a, b) of ``face``."""
     n, g, aspect, cols = geo[GEO_N], geo[GEO_GUARD], geo[GEO_ASPECT], geo[GEO_COLUMNS]
@@ -67,7 +67,7 @@ def face_to_image(geo, face_cell, cell_turns, face, a, b):
     return px, py, cell
 
 
-@jit
+@jit_inline
 def point_valid(geo, face, a, b):
     """True when (a, b) of ``face`` lies in the layout's valid region (not guard)."""
     if face < 0:
@@ -77,7 +77,7 @@ def point_valid(geo, face, a, b):
     return abs(a) <= 1.0 + ON_EDGE and abs(b) <= 1.0 + ON_EDGE
 
 
-@jit
+@jit_inline
 def point_readable(geo, face, a, b):
     """True when (a, b) holds data: the valid region or the guard ring around it."""
     if face < 0:

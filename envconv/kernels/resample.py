@@ -11,10 +11,12 @@ the valid region.
 Geometry arrives as (geo, cell_face, cell_turns, face_cell); see :mod:`envconv.kernels.cells`.
 """
 
+import math
+
 import numpy as np
 from numba import prange
 
-from .._jit import jit, jit_parallel
+from .._jit import jit_inline, jit_parallel
 from .cells import (
     GEO_FAMILY,
     cell_local,
@@ -24,7 +26,7 @@ from .cells import (
     point_readable,
     point_valid,
 )
-from .geometry import density, dir_to_face, face_to_dir
+from .geometry import density, dir_to_face, face_to_dir, is_disk
 from .taps import accumulate_sample
 
 __all__ = [
@@ -37,7 +39,7 @@ __all__ = [
 ]
 
 
-@jit
+@jit_inline
 def _output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill):
     """(face, a, b, readable, valid) of output image point (px, py); fill extends readability."""
     face, a, b, cell = locate(dgeo, d_cell_face, d_cell_turns, px, py)
@@ -51,56 +53,307 @@ def _output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill):
     return d_cell_face[cell], a, b, True, False
 
 
+@jit_inline
+def _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot):
+    """Source image point and cell of output point (a, b) of ``face``, after rotation."""
+    x, y, z = face_to_dir(dfam, face, a, b)
+    xs = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z
+    ys = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z
+    zs = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z
+    sface, sa, sb = dir_to_face(sgeo[GEO_FAMILY], xs, ys, zs)
+    return face_to_image(sgeo, s_face_cell, s_cell_turns, sface, sa, sb)
+
+
+@jit_inline
+def _exact_pixel(
+    src, sgeo, s_cell_face, s_cell_turns, s_face_cell,
+    dgeo, d_cell_face, d_cell_turns, dfam,
+    i, j, scale_x, scale_y, nx, ny, filt, rot, fill, acc, tmp,
+):  # fmt: skip
+    """Accumulate output pixel (i, j) mapping its nx × ny sub-samples exactly.
+
+    Returns (wsum, nvalid): the summed weights and the number of sub-samples in the valid region.
+    """
+    wsum = 0.0
+    nvalid = 0
+    for sy in range(ny):
+        py = (j + (sy + 0.5) / ny) * scale_y
+        for sx in range(nx):
+            px = (i + (sx + 0.5) / nx) * scale_x
+            face, a, b, readable, valid = _output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill)
+            if not readable:
+                continue
+            if valid:
+                nvalid += 1
+            w = density(dfam, face, a, b)
+            spx, spy, scell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+            accumulate_sample(
+                src, sgeo, s_cell_face, s_cell_turns, s_face_cell, scell, spx, spy, filt, w, acc, tmp
+            )
+            wsum += w
+    return wsum, nvalid
+
+
+@jit_inline
+def _auto_count(footprint):
+    """Sub-samples along an edge that spans ``footprint`` source pixels (see AUTO_SPACING)."""
+    n = int(math.ceil(footprint / AUTO_SPACING - AUTO_SLACK))
+    return min(max(n, 1), AUTO_MAX_SAMPLES)
+
+
+@jit_inline
+def _pixel_footprint(sgeo, dgeo, d_cell_face, d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill):
+    """Source pixels per output pixel edge at the centre of pixel (i, j): √(Ω_out / Ω_in).
+
+    Ω are the two pixels' solid angles there (density × pixel area in (a, b) units); the ratio
+    is isotropic, so it counts how many source pixels the output pixel covers, not their shape.
+    Returns -1 when the centre holds no direction (outside a disk).
+    """
+    px = (i + 0.5) * scale_x
+    py = (j + 0.5) * scale_y
+    face, a, b, readable, valid = _output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill)
+    if not readable:
+        return -1.0
+    d_area = (2.0 * scale_x / (dgeo[3] * dgeo[1])) * (2.0 * scale_y / dgeo[1])
+    s_area = (2.0 / (sgeo[3] * sgeo[1])) * (2.0 / sgeo[1])
+    x, y, z = face_to_dir(dfam, face, a, b)
+    xs = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z
+    ys = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z
+    zs = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z
+    sfam = sgeo[GEO_FAMILY]
+    sface, sa, sb = dir_to_face(sfam, xs, ys, zs)
+    omega_in = density(sfam, sface, sa, sb) * s_area
+    omega_out = density(dfam, face, a, b) * d_area
+    if omega_in <= omega_out * 1e-6:  # a degenerate point of the source (angular's rim)
+        return 1e3
+    return math.sqrt(omega_out / omega_in)
+
+
+@jit_inline
+def _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
+    """(face, cell) when the level-0 box [x0, x1] × [y0, y1] lies in one cell's valid region.
+
+    The valid region is convex (a rectangle or a disk), so checking the four corners suffices.
+    Returns face -1 otherwise.
+    """
+    face, a, b, cell = locate(dgeo, d_cell_face, d_cell_turns, x0, y0)
+    if face < 0 or not point_valid(dgeo, face, a, b):
+        return -1, cell
+    xe = np.nextafter(x1, x0)
+    ye = np.nextafter(y1, y0)
+    for k in range(3):
+        px = xe if k != 1 else x0
+        py = ye if k != 0 else y0
+        face2, a2, b2, cell2 = locate(dgeo, d_cell_face, d_cell_turns, px, py)
+        if cell2 != cell or not point_valid(dgeo, face, a2, b2):
+            return -1, cell
+    return face, cell
+
+
+# Tiles of TILE × TILE output pixels share four exactly mapped corners; the source position
+# of a sub-sample inside is interpolated bilinearly from them. The map is then checked exactly
+# at a 3 × 3 grid of interior points (quarter and half points): a quadratic error shows at the
+# half points, a cubic one (odd about the centre) at the quarter points. If any check is more
+# than INTERP_TOLERANCE source pixels off (a seam, a pole, a wrap, strong curvature), or a
+# corner lands in another source cell, the tile maps every sub-sample exactly instead. Tiles are
+# only tried when they span at most 1/MIN_TILES_PER_CELL of a cell, so that the terms of order
+# higher than three, which the checks could miss, are negligible. Weights (the solid-angle
+# density) are always evaluated exactly, at the sub-sample's interpolated (a, b): (a, b) is an
+# affine function of the image point inside one cell, so that interpolation is exact.
+TILE = 8
+INTERP_TOLERANCE = 0.01
+MIN_TILES_PER_CELL = 8
+
+# samples <= 0 asks for adaptive sub-sampling: each pixel (or tile) takes nx × ny sub-samples
+# with nx = ceil(footprint_x / AUTO_SPACING - AUTO_SLACK), where footprint_x is the number of
+# source pixels its edge spans there, so sub-samples are never more than about AUTO_SPACING
+# source pixels apart and every source texel under the pixel is visited. Tiles measure the
+# footprint along each axis from their corners (anisotropic: lat-long near a pole); exactly
+# mapped pixels from the ratio of solid angles at their centre. A pixel whose centre holds no
+# direction (a disk's rim) takes AUTO_RIM_SAMPLES per edge, for its coverage.
+AUTO_SPACING = 0.5
+AUTO_SLACK = 0.2
+AUTO_MAX_SAMPLES = 32
+AUTO_RIM_SAMPLES = 4
+
+
+@jit_inline
+def _tile_interpolates(
+    sgeo, s_face_cell, s_cell_turns, dfam, face, rot,
+    a00, b00, da_x, db_x, da_y, db_y, p00x, p00y, p10x, p10y, p01x, p01y, p11x, p11y, c00,
+):  # fmt: skip
+    """True when bilinear interpolation of the corners matches the exact map inside the tile."""
+    for qy in range(1, 4):
+        fy = 0.25 * qy
+        for qx in range(1, 4):
+            fx = 0.25 * qx
+            a = a00 + da_x * fx + da_y * fy
+            b = b00 + db_x * fx + db_y * fy
+            px, py, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+            if cell != c00:
+                return False
+            ix = (1.0 - fy) * (p00x + (p10x - p00x) * fx) + fy * (p01x + (p11x - p01x) * fx)
+            iy = (1.0 - fy) * (p00y + (p10y - p00y) * fx) + fy * (p01y + (p11y - p01y) * fx)
+            if abs(ix - px) > INTERP_TOLERANCE or abs(iy - py) > INTERP_TOLERANCE:
+                return False
+    return True
+
+
 @jit_parallel
 def resample_rows(
     src, sgeo, s_cell_face, s_cell_turns, s_face_cell,
     dgeo, d_cell_face, d_cell_turns,
     scale_x, scale_y, samples, filt, rot, fill, out, alpha,
 ):  # fmt: skip
-    """Fill ``out`` (H, W, C float32) and ``alpha`` (H, W float32); see the module docstring."""
+    """Fill ``out`` (H, W, C float32) and ``alpha`` (H, W float32); see the module docstring.
+
+    Work is split into bands of TILE output rows, one band per parallel task, so the working
+    set is bounded by a few rows whatever the image size.
+    """
     height, width, nch = out.shape
-    sfam = sgeo[GEO_FAMILY]
     dfam = dgeo[GEO_FAMILY]
-    inv_s = 1.0 / samples
-    inv_ss = inv_s * inv_s
-    for j in prange(height):
+    sfam = sgeo[GEO_FAMILY]
+    adaptive = samples <= 0
+    n_bands = (height + TILE - 1) // TILE
+    # Source cells are directly readable rectangles unless the source is a disk layout.
+    s_n, s_g, s_aspect, s_cols = sgeo[1], sgeo[2], sgeo[3], sgeo[4]
+    s_cw = s_aspect * s_n + 2 * s_g
+    s_ch = s_n + 2 * s_g
+    fast_taps = filt == 1 and not is_disk(sfam)
+    # Tiles small enough against an output cell (level-0 pixels) for the checks to hold.
+    d_n, d_aspect = dgeo[1], dgeo[3]
+    may_tile = (
+        TILE * scale_x * MIN_TILES_PER_CELL <= d_aspect * d_n
+        and TILE * scale_y * MIN_TILES_PER_CELL <= d_n
+    )
+    for band in prange(n_bands):
         acc = np.zeros(nch, np.float64)
         tmp = np.zeros(3 * nch, np.float64)
-        for i in range(width):
-            acc[:] = 0.0
-            wsum = 0.0
-            nvalid = 0
-            for sy in range(samples):
-                py = (j + (sy + 0.5) * inv_s) * scale_y
-                for sx in range(samples):
-                    px = (i + (sx + 0.5) * inv_s) * scale_x
-                    face, a, b, readable, valid = _output_sample(
-                        dgeo, d_cell_face, d_cell_turns, px, py, fill
-                    )
-                    if not readable:
-                        continue
-                    if valid:
-                        nvalid += 1
-                    w = density(dfam, face, a, b)
-                    x, y, z = face_to_dir(dfam, face, a, b)
-                    xs = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z
-                    ys = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z
-                    zs = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z
-                    sface, sa, sb = dir_to_face(sfam, xs, ys, zs)
-                    spx, spy, scell = face_to_image(sgeo, s_face_cell, s_cell_turns, sface, sa, sb)
-                    accumulate_sample(
-                        src, sgeo, s_cell_face, s_cell_turns, s_face_cell, scell,
-                        spx, spy, filt, w, acc, tmp,
+        j0 = band * TILE
+        j1 = min(j0 + TILE, height)
+        for i0 in range(0, width, TILE):
+            i1 = min(i0 + TILE, width)
+            x0 = i0 * scale_x
+            y0 = j0 * scale_y
+            x1 = i1 * scale_x
+            y1 = j1 * scale_y
+            face = -1
+            cell = -1
+            if may_tile:
+                face, cell = _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1)
+            tiled = False
+            if face >= 0:
+                a00, b00 = cell_local(dgeo, d_cell_turns, cell, x0, y0)
+                a10, b10 = cell_local(dgeo, d_cell_turns, cell, x1, y0)
+                a01, b01 = cell_local(dgeo, d_cell_turns, cell, x0, y1)
+                a11 = a10 + a01 - a00
+                b11 = b10 + b01 - b00
+                p00x, p00y, c00 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a00, b00, rot)
+                p10x, p10y, c10 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a10, b10, rot)
+                p01x, p01y, c01 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a01, b01, rot)
+                p11x, p11y, c11 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a11, b11, rot)
+                if c10 == c00 and c01 == c00 and c11 == c00:
+                    tiled = _tile_interpolates(
+                        sgeo, s_face_cell, s_cell_turns, dfam, face, rot,
+                        a00, b00, a10 - a00, b10 - b00, a01 - a00, b01 - b00,
+                        p00x, p00y, p10x, p10y, p01x, p01y, p11x, p11y, c00,
                     )  # fmt: skip
-                    wsum += w
-            if wsum > 0.0:
-                inv = 1.0 / wsum
-                for c in range(nch):
-                    out[j, i, c] = acc[c] * inv
-            else:
-                for c in range(nch):
-                    out[j, i, c] = 0.0
-            alpha[j, i] = nvalid * inv_ss
+            if not tiled:
+                for j in range(j0, j1):
+                    for i in range(i0, i1):
+                        for c in range(nch):
+                            acc[c] = 0.0
+                        nx = samples
+                        if adaptive:
+                            footprint = _pixel_footprint(
+                                sgeo, dgeo, d_cell_face, d_cell_turns, dfam,
+                                i, j, scale_x, scale_y, rot, fill,
+                            )  # fmt: skip
+                            nx = AUTO_RIM_SAMPLES if footprint < 0.0 else _auto_count(footprint)
+                        wsum, nvalid = _exact_pixel(
+                            src, sgeo, s_cell_face, s_cell_turns, s_face_cell,
+                            dgeo, d_cell_face, d_cell_turns, dfam,
+                            i, j, scale_x, scale_y, nx, nx, filt, rot, fill, acc, tmp,
+                        )  # fmt: skip
+                        _store(out, alpha, j, i, acc, wsum, nvalid / (nx * nx))
+                continue
+            bx0 = (c00 % s_cols) * s_cw
+            by0 = (c00 // s_cols) * s_ch
+            bx1 = bx0 + s_cw - 1
+            by1 = by0 + s_ch - 1
+            inv_tw = 1.0 / (i1 - i0)
+            inv_th = 1.0 / (j1 - j0)
+            nx = samples
+            ny = samples
+            if adaptive:
+                edge_x = max(math.hypot(p10x - p00x, p10y - p00y), math.hypot(p11x - p01x, p11y - p01y))
+                edge_y = max(math.hypot(p01x - p00x, p01y - p00y), math.hypot(p11x - p10x, p11y - p10y))
+                nx = _auto_count(edge_x * inv_tw)
+                ny = _auto_count(edge_y * inv_th)
+            inv_nx = 1.0 / nx
+            inv_ny = 1.0 / ny
+            da_x = a10 - a00
+            db_x = b10 - b00
+            da_y = a01 - a00
+            db_y = b01 - b00
+            for j in range(j0, j1):
+                for i in range(i0, i1):
+                    for c in range(nch):
+                        acc[c] = 0.0
+                    wsum = 0.0
+                    for sy in range(ny):
+                        fy = (j - j0 + (sy + 0.5) * inv_ny) * inv_th
+                        # Left and right edges of the tile at this height.
+                        lx = p00x + (p01x - p00x) * fy
+                        ly = p00y + (p01y - p00y) * fy
+                        rx = p10x + (p11x - p10x) * fy
+                        ry = p10y + (p11y - p10y) * fy
+                        la = a00 + da_y * fy
+                        lb = b00 + db_y * fy
+                        for sx in range(nx):
+                            fx = (i - i0 + (sx + 0.5) * inv_nx) * inv_tw
+                            spx = lx + (rx - lx) * fx
+                            spy = ly + (ry - ly) * fx
+                            w = density(dfam, face, la + da_x * fx, lb + db_x * fx)
+                            wsum += w
+                            tx = spx - 0.5
+                            ty = spy - 0.5
+                            ix = int(np.floor(tx))
+                            iy = int(np.floor(ty))
+                            if fast_taps and ix >= bx0 and iy >= by0 and ix < bx1 and iy < by1:
+                                tx -= ix
+                                ty -= iy
+                                k00 = w * (1.0 - tx) * (1.0 - ty)
+                                k10 = w * tx * (1.0 - ty)
+                                k01 = w * (1.0 - tx) * ty
+                                k11 = w * tx * ty
+                                for c in range(nch):
+                                    acc[c] += (
+                                        k00 * src[iy, ix, c]
+                                        + k10 * src[iy, ix + 1, c]
+                                        + k01 * src[iy + 1, ix, c]
+                                        + k11 * src[iy + 1, ix + 1, c]
+                                    )
+                            else:
+                                accumulate_sample(
+                                    src, sgeo, s_cell_face, s_cell_turns, s_face_cell, c00,
+                                    spx, spy, filt, w, acc, tmp,
+                                )  # fmt: skip
+                    _store(out, alpha, j, i, acc, wsum, 1.0)
+
+
+@jit_inline
+def _store(out, alpha, j, i, acc, wsum, coverage):
+    """Write the normalised accumulator and the coverage of output pixel (i, j)."""
+    nch = out.shape[2]
+    if wsum > 0.0:
+        inv = 1.0 / wsum
+        for c in range(nch):
+            out[j, i, c] = acc[c] * inv
+    else:
+        for c in range(nch):
+            out[j, i, c] = 0.0
+    alpha[j, i] = coverage
 
 
 @jit_parallel
@@ -169,7 +422,7 @@ def pixel_solid_angles(geo, cell_face, cell_turns, scale_x, scale_y, samples, ou
             out[j, i] = total
 
 
-@jit
+@jit_inline
 def dir_density(geo, dirs, out):
     """Solid-angle density of the layout at each direction's (face, a, b)."""
     fam = geo[GEO_FAMILY]

@@ -9,7 +9,7 @@ wrap and continue over the poles, and taps past a disk read across the rim.
 
 import math
 
-from .._jit import jit
+from .._jit import jit, jit_inline
 from .cells import (
     GEO_ASPECT,
     GEO_COLUMNS,
@@ -28,7 +28,7 @@ FILTER_BILINEAR = 1
 FILTER_BICUBIC = 2
 
 
-@jit
+@jit_inline
 def _tap_ok(geo, cell, ix, iy):
     """True when texel (ix, iy) lies in ``cell``'s readable region."""
     n, g, aspect, cols = geo[GEO_N], geo[GEO_GUARD], geo[GEO_ASPECT], geo[GEO_COLUMNS]
@@ -64,7 +64,7 @@ def _remap_tap(geo, cell_face, cell_turns, face_cell, cell, ix, iy):
     return jx, jy
 
 
-@jit
+@jit_inline
 def _fetch(src, geo, cell_face, cell_turns, face_cell, cell, ix, iy, fast):
     """Source texel coordinates for tap (ix, iy): itself, or its continued-direction owner."""
     if fast or _tap_ok(geo, cell, ix, iy):
@@ -84,7 +84,7 @@ def _cubic_weights(t):
     return w0, w1, w2, w3
 
 
-@jit
+@jit_inline
 def _block_inside(geo, cell, x_lo, y_lo, x_hi, y_hi):
     """True when every texel of [x_lo, x_hi] × [y_lo, y_hi] is directly readable."""
     n, g, aspect, cols = geo[GEO_N], geo[GEO_GUARD], geo[GEO_ASPECT], geo[GEO_COLUMNS]
@@ -104,7 +104,7 @@ def _block_inside(geo, cell, x_lo, y_lo, x_hi, y_hi):
     return True
 
 
-@jit
+@jit_inline
 def accumulate_sample(src, geo, cell_face, cell_turns, face_cell, cell, px, py, filt, w, acc, tmp):
     """Add ``w`` × (filtered source at image point (px, py) of ``cell``) to ``acc``.
 
