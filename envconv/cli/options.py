@@ -86,7 +86,7 @@ READ = [
 RESAMPLE = [
     ("to", click.option("--to", "to", required=True, type=layout_choice(), help="Output layout.")),
     ("size", click.option("--size", type=click.IntRange(min=1), help="Output N (face edge, height, diameter); default keeps the input's horizon resolution.")),
-    ("samples", click.option("--samples", default="auto", callback=parse_samples, show_default=True, help="Sub-samples per pixel edge S (S×S per pixel), or 'auto' from the size ratio.")),
+    ("samples", click.option("--samples", default="auto", callback=parse_samples, show_default=True, help="Sub-samples per pixel edge S (S×S per pixel), or 'auto': per pixel, about two per source texel its edge spans.")),
     ("filter", click.option("--filter", "filter", type=click.Choice(list(FILTERS)), default="bilinear", show_default=True, help="Reconstruction filter for source reads.")),
     ("rotate", click.option("--rotate", metavar="YAW,PITCH,ROLL", help="Rotate the environment, degrees: about +Y, then +X, then +Z (right-hand rule).")),
     ("alpha", click.option("--alpha", is_flag=True, help="Add an alpha channel: each pixel's coverage of the valid region.")),

@@ -102,18 +102,39 @@ def _auto_count(footprint):
 
 
 @jit_inline
-def _pixel_footprint(sgeo, dgeo, d_cell_face, d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill):
-    """Source pixels per output pixel edge at the centre of pixel (i, j): √(Ω_out / Ω_in).
+def _pixel_footprint(
+    sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam,
+    i, j, scale_x, scale_y, rot, fill,
+):  # fmt: skip
+    """Source pixels spanned by the x and y edges of output pixel (i, j), at its centre.
 
-    Ω are the two pixels' solid angles there (density × pixel area in (a, b) units); the ratio
-    is isotropic, so it counts how many source pixels the output pixel covers, not their shape.
-    Returns -1 when the centre holds no direction (outside a disk).
+    From the Jacobian of the map output point → source point, by differences over a hundredth
+    of a pixel: anisotropic, so a mirror ball's rim (radially squeezed) or a lat-long's polar
+    rows (stretched in x) get their sub-samples along the axis that needs them. Where the
+    difference crosses a source seam, the isotropic √(Ω_out / Ω_in) of the pixel solid angles
+    is used instead. Returns (-1, -1) when the centre holds no direction (outside a disk).
     """
     px = (i + 0.5) * scale_x
     py = (j + 0.5) * scale_y
     face, a, b, readable, valid = _output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill)
     if not readable:
-        return -1.0
+        return -1.0, -1.0
+    sx0, sy0, cell0 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+    delta = 0.01
+    face1, a1, b1, ok1, valid1 = _output_sample(
+        dgeo, d_cell_face, d_cell_turns, px + delta * scale_x, py, fill
+    )
+    face2, a2, b2, ok2, valid2 = _output_sample(
+        dgeo, d_cell_face, d_cell_turns, px, py + delta * scale_y, fill
+    )
+    if ok1 and ok2 and face1 == face and face2 == face:
+        sx1, sy1, cell1 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a1, b1, rot)
+        sx2, sy2, cell2 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a2, b2, rot)
+        span_x = math.hypot(sx1 - sx0, sy1 - sy0) / delta
+        span_y = math.hypot(sx2 - sx0, sy2 - sy0) / delta
+        if cell1 == cell0 and cell2 == cell0 and span_x < sgeo[1] and span_y < sgeo[1]:
+            return span_x, span_y
+    # A seam between the points: the ratio of the two pixels' solid angles (density × area).
     d_area = (2.0 * scale_x / (dgeo[3] * dgeo[1])) * (2.0 * scale_y / dgeo[1])
     s_area = (2.0 / (sgeo[3] * sgeo[1])) * (2.0 / sgeo[1])
     x, y, z = face_to_dir(dfam, face, a, b)
@@ -125,8 +146,21 @@ def _pixel_footprint(sgeo, dgeo, d_cell_face, d_cell_turns, dfam, i, j, scale_x,
     omega_in = density(sfam, sface, sa, sb) * s_area
     omega_out = density(dfam, face, a, b) * d_area
     if omega_in <= omega_out * 1e-6:  # a degenerate point of the source (angular's rim)
-        return 1e3
-    return math.sqrt(omega_out / omega_in)
+        return 1e3, 1e3
+    ratio = math.sqrt(omega_out / omega_in)
+    return ratio, ratio
+
+
+@jit_inline
+def _tile_in_empty_cell(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
+    """True when the level-0 box [x0, x1) × [y0, y1) lies in one cell that holds no face."""
+    face, a, b, cell = locate(dgeo, d_cell_face, d_cell_turns, x0, y0)
+    if face >= 0:
+        return False
+    face2, a2, b2, cell2 = locate(
+        dgeo, d_cell_face, d_cell_turns, np.nextafter(x1, x0), np.nextafter(y1, y0)
+    )
+    return cell2 == cell
 
 
 @jit_inline
@@ -150,53 +184,81 @@ def _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
     return face, cell
 
 
-# Tiles of TILE × TILE output pixels share four exactly mapped corners; the source position
-# of a sub-sample inside is interpolated bilinearly from them. The map is then checked exactly
-# at a 3 × 3 grid of interior points (quarter and half points): a quadratic error shows at the
-# half points, a cubic one (odd about the centre) at the quarter points. If any check is more
-# than INTERP_TOLERANCE source pixels off (a seam, a pole, a wrap, strong curvature), or a
-# corner lands in another source cell, the tile maps every sub-sample exactly instead. Tiles are
-# only tried when they span at most 1/MIN_TILES_PER_CELL of a cell, so that the terms of order
-# higher than three, which the checks could miss, are negligible. Weights (the solid-angle
-# density) are always evaluated exactly, at the sub-sample's interpolated (a, b): (a, b) is an
-# affine function of the image point inside one cell, so that interpolation is exact.
+# Tiles of TILE × TILE output pixels map a 3 × 3 grid of points exactly (corners, edge midpoints,
+# centre); the source position of every sub-sample inside is interpolated biquadratically from
+# them. The map is then checked exactly at the four quarter points (1/4 or 3/4 along each axis),
+# where the cubic error of that interpolation is near its largest. If a check is more than
+# INTERP_TOLERANCE source pixels off (a seam, a pole, a wrap, strong curvature), or a grid point
+# lands in another source cell, the tile maps every sub-sample exactly instead. Tiles are only
+# tried when they span at most 1/MIN_TILES_PER_CELL of a cell, so that higher-order terms, which
+# the checks could miss, are negligible. Weights (the solid-angle density) are evaluated exactly,
+# at the sub-sample's interpolated (a, b): (a, b) is affine in the image point within one cell,
+# so that interpolation is exact. At INTERP_TOLERANCE = 0.01 texel, a sub-sample's read is off by
+# at most 1% of the difference between neighbouring texels.
 TILE = 8
 INTERP_TOLERANCE = 0.01
 MIN_TILES_PER_CELL = 8
+
+
+@jit_inline
+def _lagrange3(g0, g1, g2, f):
+    """Quadratic through (0, g0), (0.5, g1), (1, g2), at f."""
+    return g0 * (2.0 * f * f - 3.0 * f + 1.0) + g1 * (4.0 * f - 4.0 * f * f) + g2 * (2.0 * f * f - f)
+
+
+@jit_inline
+def _map_tile(
+    sgeo, s_face_cell, s_cell_turns, dfam, face, rot, a00, b00, da_x, db_x, da_y, db_y, grid,
+):  # fmt: skip
+    """Map the tile's 3 × 3 grid into ``grid`` (3, 3, 2) and check the quarter points.
+
+    Returns the source cell when biquadratic interpolation of the grid is within
+    INTERP_TOLERANCE of the exact map and the whole grid lies in that cell, else -1.
+    """
+    cell0 = -1
+    for r in range(3):
+        for c in range(3):
+            a = a00 + da_x * (0.5 * c) + da_y * (0.5 * r)
+            b = b00 + db_x * (0.5 * c) + db_y * (0.5 * r)
+            px, py, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+            if r == 0 and c == 0:
+                cell0 = cell
+            elif cell != cell0:
+                return -1
+            grid[r, c, 0] = px
+            grid[r, c, 1] = py
+    for q in range(4):
+        fx = 0.25 + 0.5 * (q % 2)
+        fy = 0.25 + 0.5 * (q // 2)
+        a = a00 + da_x * fx + da_y * fy
+        b = b00 + db_x * fx + db_y * fy
+        px, py, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+        if cell != cell0:
+            return -1
+        for k in range(2):
+            value = px if k == 0 else py
+            interpolated = _lagrange3(
+                _lagrange3(grid[0, 0, k], grid[0, 1, k], grid[0, 2, k], fx),
+                _lagrange3(grid[1, 0, k], grid[1, 1, k], grid[1, 2, k], fx),
+                _lagrange3(grid[2, 0, k], grid[2, 1, k], grid[2, 2, k], fx),
+                fy,
+            )
+            if abs(interpolated - value) > INTERP_TOLERANCE:
+                return -1
+    return cell0
+
 
 # samples <= 0 asks for adaptive sub-sampling: each pixel (or tile) takes nx × ny sub-samples
 # with nx = ceil(footprint_x / AUTO_SPACING - AUTO_SLACK), where footprint_x is the number of
 # source pixels its edge spans there, so sub-samples are never more than about AUTO_SPACING
 # source pixels apart and every source texel under the pixel is visited. Tiles measure the
-# footprint along each axis from their corners (anisotropic: lat-long near a pole); exactly
-# mapped pixels from the ratio of solid angles at their centre. A pixel whose centre holds no
-# direction (a disk's rim) takes AUTO_RIM_SAMPLES per edge, for its coverage.
+# footprint along each axis from their corners, exactly mapped pixels from the Jacobian at their
+# centre (both anisotropic: a lat-long's polar rows, a mirror ball's rim). A pixel whose centre
+# holds no direction (a disk's rim) takes AUTO_RIM_SAMPLES per edge, for its coverage.
 AUTO_SPACING = 0.5
 AUTO_SLACK = 0.2
 AUTO_MAX_SAMPLES = 32
 AUTO_RIM_SAMPLES = 4
-
-
-@jit_inline
-def _tile_interpolates(
-    sgeo, s_face_cell, s_cell_turns, dfam, face, rot,
-    a00, b00, da_x, db_x, da_y, db_y, p00x, p00y, p10x, p10y, p01x, p01y, p11x, p11y, c00,
-):  # fmt: skip
-    """True when bilinear interpolation of the corners matches the exact map inside the tile."""
-    for qy in range(1, 4):
-        fy = 0.25 * qy
-        for qx in range(1, 4):
-            fx = 0.25 * qx
-            a = a00 + da_x * fx + da_y * fy
-            b = b00 + db_x * fx + db_y * fy
-            px, py, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
-            if cell != c00:
-                return False
-            ix = (1.0 - fy) * (p00x + (p10x - p00x) * fx) + fy * (p01x + (p11x - p01x) * fx)
-            iy = (1.0 - fy) * (p00y + (p10y - p00y) * fx) + fy * (p01y + (p11y - p01y) * fx)
-            if abs(ix - px) > INTERP_TOLERANCE or abs(iy - py) > INTERP_TOLERANCE:
-                return False
-    return True
 
 
 @jit_parallel
@@ -229,6 +291,7 @@ def resample_rows(
     for band in prange(n_bands):
         acc = np.zeros(nch, np.float64)
         tmp = np.zeros(3 * nch, np.float64)
+        grid = np.empty((3, 3, 2), np.float64)
         j0 = band * TILE
         j1 = min(j0 + TILE, height)
         for i0 in range(0, width, TILE):
@@ -237,45 +300,54 @@ def resample_rows(
             y0 = j0 * scale_y
             x1 = i1 * scale_x
             y1 = j1 * scale_y
+            if not fill and _tile_in_empty_cell(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
+                for j in range(j0, j1):
+                    for i in range(i0, i1):
+                        out[j, i, :] = 0.0
+                        alpha[j, i] = 0.0
+                continue
             face = -1
             cell = -1
             if may_tile:
                 face, cell = _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1)
-            tiled = False
+            c00 = -1
             if face >= 0:
                 a00, b00 = cell_local(dgeo, d_cell_turns, cell, x0, y0)
                 a10, b10 = cell_local(dgeo, d_cell_turns, cell, x1, y0)
                 a01, b01 = cell_local(dgeo, d_cell_turns, cell, x0, y1)
-                a11 = a10 + a01 - a00
-                b11 = b10 + b01 - b00
-                p00x, p00y, c00 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a00, b00, rot)
-                p10x, p10y, c10 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a10, b10, rot)
-                p01x, p01y, c01 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a01, b01, rot)
-                p11x, p11y, c11 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a11, b11, rot)
-                if c10 == c00 and c01 == c00 and c11 == c00:
-                    tiled = _tile_interpolates(
-                        sgeo, s_face_cell, s_cell_turns, dfam, face, rot,
-                        a00, b00, a10 - a00, b10 - b00, a01 - a00, b01 - b00,
-                        p00x, p00y, p10x, p10y, p01x, p01y, p11x, p11y, c00,
-                    )  # fmt: skip
+                da_x = a10 - a00
+                db_x = b10 - b00
+                da_y = a01 - a00
+                db_y = b01 - b00
+                c00 = _map_tile(
+                    sgeo, s_face_cell, s_cell_turns, dfam, face, rot,
+                    a00, b00, da_x, db_x, da_y, db_y, grid,
+                )  # fmt: skip
+            tiled = c00 >= 0
             if not tiled:
                 for j in range(j0, j1):
                     for i in range(i0, i1):
                         for c in range(nch):
                             acc[c] = 0.0
                         nx = samples
+                        ny = samples
                         if adaptive:
-                            footprint = _pixel_footprint(
-                                sgeo, dgeo, d_cell_face, d_cell_turns, dfam,
-                                i, j, scale_x, scale_y, rot, fill,
+                            span_x, span_y = _pixel_footprint(
+                                sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face,
+                                d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill,
                             )  # fmt: skip
-                            nx = AUTO_RIM_SAMPLES if footprint < 0.0 else _auto_count(footprint)
+                            if span_x < 0.0:
+                                nx = AUTO_RIM_SAMPLES
+                                ny = AUTO_RIM_SAMPLES
+                            else:
+                                nx = _auto_count(span_x)
+                                ny = _auto_count(span_y)
                         wsum, nvalid = _exact_pixel(
                             src, sgeo, s_cell_face, s_cell_turns, s_face_cell,
                             dgeo, d_cell_face, d_cell_turns, dfam,
-                            i, j, scale_x, scale_y, nx, nx, filt, rot, fill, acc, tmp,
+                            i, j, scale_x, scale_y, nx, ny, filt, rot, fill, acc, tmp,
                         )  # fmt: skip
-                        _store(out, alpha, j, i, acc, wsum, nvalid / (nx * nx))
+                        _store(out, alpha, j, i, acc, wsum, nvalid / (nx * ny))
                 continue
             bx0 = (c00 % s_cols) * s_cw
             by0 = (c00 // s_cols) * s_ch
@@ -286,34 +358,44 @@ def resample_rows(
             nx = samples
             ny = samples
             if adaptive:
-                edge_x = max(math.hypot(p10x - p00x, p10y - p00y), math.hypot(p11x - p01x, p11y - p01y))
-                edge_y = max(math.hypot(p01x - p00x, p01y - p00y), math.hypot(p11x - p10x, p11y - p10y))
+                edge_x = 0.0
+                edge_y = 0.0
+                for k in range(3):
+                    edge_x = max(edge_x, math.hypot(grid[k, 2, 0] - grid[k, 0, 0], grid[k, 2, 1] - grid[k, 0, 1]))
+                    edge_y = max(edge_y, math.hypot(grid[2, k, 0] - grid[0, k, 0], grid[2, k, 1] - grid[0, k, 1]))
                 nx = _auto_count(edge_x * inv_tw)
                 ny = _auto_count(edge_y * inv_th)
             inv_nx = 1.0 / nx
             inv_ny = 1.0 / ny
-            da_x = a10 - a00
-            db_x = b10 - b00
-            da_y = a01 - a00
-            db_y = b01 - b00
+            rgb = fast_taps and nch == 3
             for j in range(j0, j1):
                 for i in range(i0, i1):
                     for c in range(nch):
                         acc[c] = 0.0
+                    # Three channels (the common case) accumulate in registers.
+                    acc_r = 0.0
+                    acc_g = 0.0
+                    acc_b = 0.0
                     wsum = 0.0
                     for sy in range(ny):
                         fy = (j - j0 + (sy + 0.5) * inv_ny) * inv_th
-                        # Left and right edges of the tile at this height.
-                        lx = p00x + (p01x - p00x) * fy
-                        ly = p00y + (p01y - p00y) * fy
-                        rx = p10x + (p11x - p10x) * fy
-                        ry = p10y + (p11y - p10y) * fy
+                        # This row of sub-samples: x and y as quadratics in fx, c0 + fx (c1 + fx c2).
+                        q0x = _lagrange3(grid[0, 0, 0], grid[1, 0, 0], grid[2, 0, 0], fy)
+                        q1x = _lagrange3(grid[0, 1, 0], grid[1, 1, 0], grid[2, 1, 0], fy)
+                        q2x = _lagrange3(grid[0, 2, 0], grid[1, 2, 0], grid[2, 2, 0], fy)
+                        q0y = _lagrange3(grid[0, 0, 1], grid[1, 0, 1], grid[2, 0, 1], fy)
+                        q1y = _lagrange3(grid[0, 1, 1], grid[1, 1, 1], grid[2, 1, 1], fy)
+                        q2y = _lagrange3(grid[0, 2, 1], grid[1, 2, 1], grid[2, 2, 1], fy)
+                        c1x = -3.0 * q0x + 4.0 * q1x - q2x
+                        c2x = 2.0 * q0x - 4.0 * q1x + 2.0 * q2x
+                        c1y = -3.0 * q0y + 4.0 * q1y - q2y
+                        c2y = 2.0 * q0y - 4.0 * q1y + 2.0 * q2y
                         la = a00 + da_y * fy
                         lb = b00 + db_y * fy
                         for sx in range(nx):
                             fx = (i - i0 + (sx + 0.5) * inv_nx) * inv_tw
-                            spx = lx + (rx - lx) * fx
-                            spy = ly + (ry - ly) * fx
+                            spx = q0x + fx * (c1x + fx * c2x)
+                            spy = q0y + fx * (c1y + fx * c2y)
                             w = density(dfam, face, la + da_x * fx, lb + db_x * fx)
                             wsum += w
                             tx = spx - 0.5
@@ -327,6 +409,20 @@ def resample_rows(
                                 k10 = w * tx * (1.0 - ty)
                                 k01 = w * (1.0 - tx) * ty
                                 k11 = w * tx * ty
+                                if rgb:
+                                    acc_r += (
+                                        k00 * src[iy, ix, 0] + k10 * src[iy, ix + 1, 0]
+                                        + k01 * src[iy + 1, ix, 0] + k11 * src[iy + 1, ix + 1, 0]
+                                    )  # fmt: skip
+                                    acc_g += (
+                                        k00 * src[iy, ix, 1] + k10 * src[iy, ix + 1, 1]
+                                        + k01 * src[iy + 1, ix, 1] + k11 * src[iy + 1, ix + 1, 1]
+                                    )  # fmt: skip
+                                    acc_b += (
+                                        k00 * src[iy, ix, 2] + k10 * src[iy, ix + 1, 2]
+                                        + k01 * src[iy + 1, ix, 2] + k11 * src[iy + 1, ix + 1, 2]
+                                    )  # fmt: skip
+                                    continue
                                 for c in range(nch):
                                     acc[c] += (
                                         k00 * src[iy, ix, c]
@@ -339,6 +435,10 @@ def resample_rows(
                                     src, sgeo, s_cell_face, s_cell_turns, s_face_cell, c00,
                                     spx, spy, filt, w, acc, tmp,
                                 )  # fmt: skip
+                    if rgb:
+                        acc[0] += acc_r
+                        acc[1] += acc_g
+                        acc[2] += acc_b
                     _store(out, alpha, j, i, acc, wsum, 1.0)
 
 

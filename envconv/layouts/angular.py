@@ -56,7 +56,13 @@ def dir_to_face(x, y, z):
         if z >= 0.0:
             return 0, 0.0, 0.0
         return 0, 1.0, 0.0
-    return 0, rad * x / r_xy, -rad * y / r_xy
+    if r_xy < 1e-150:
+        # Scale tiny (x, y) up by an exact power of two before dividing by their length: the
+        # kernels' fast-math may divide by multiplying with 1/r_xy, which overflows here.
+        x *= 2.0**600
+        y *= 2.0**600
+        r_xy = math.hypot(x, y)
+    return 0, rad * (x / r_xy), -rad * (y / r_xy)
 
 
 @jit

@@ -1,0 +1,137 @@
+"""envconv benchmarks: kernel throughput, end-to-end conversion time and peak memory.
+
+Run by hand and quote the figures; nothing here is a test.
+
+    python benchmarks/bench.py              # everything
+    python benchmarks/bench.py kernel       # supersamples per second in the kernel
+    python benchmarks/bench.py e2e          # whole-process lat-long 2048x1024 EXR -> cube-vcross 512
+
+Kernel throughput counts output supersamples (pixels × S²) per second of kernel wall time, for
+lat-long 4096×2048 → cube-vcross 1024 on all cores, after one warm-up run. End-to-end time runs
+``envconv convert`` as a fresh process (interpreter start to file written), takes the median of
+several runs and excludes the first (which may compile). Peak memory is the child's max RSS.
+"""
+
+from __future__ import annotations
+
+import os
+import resource
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, ROOT)
+
+import envconv  # noqa: E402
+from envconv.geometry import kernel_geometry  # noqa: E402
+from envconv.kernels.resample import resample_rows  # noqa: E402
+
+EXAMPLE = os.path.join(ROOT, "examples", "data", "park-latlong-512.exr")
+
+
+def _latlong(height: int) -> envconv.EnvMap:
+    """A lat-long of the park example upsampled to ``height`` rows, RGB float32."""
+    park = envconv.read(EXAMPLE)
+    return envconv.convert(park, "latlong", size=height, samples=1)
+
+
+def bench_kernel(samples=(1, 2, 4, 0), repeats: int = 3) -> None:
+    """Kernel throughput at fixed S; S=0 is samples="auto" (adaptive; reported as time only)."""
+    src = _latlong(2048)
+    to = envconv.layouts.get_layout("cube-vcross")
+    n = 1024
+    width, height = to.image_size(n)
+    sgeo = kernel_geometry(src.layout, src.size, 0)
+    dgeo, cf, ct, _ = kernel_geometry(to, n, 0)
+    rot = np.eye(3)
+    out = np.empty((height, width, 3), np.float32)
+    alpha = np.empty((height, width), np.float32)
+    face_pixels = 6 * n * n
+    for s in samples:
+        resample_rows(src.pixels, *sgeo, dgeo, cf, ct, 1.0, 1.0, s, 1, rot, False, out, alpha)
+        times = []
+        for _ in range(repeats):
+            t = time.perf_counter()
+            resample_rows(src.pixels, *sgeo, dgeo, cf, ct, 1.0, 1.0, s, 1, rot, False, out, alpha)
+            times.append(time.perf_counter() - t)
+        best = min(times)
+        if s == 0:
+            print(f"kernel latlong 4096x2048 -> cube-vcross 1024, S=auto: {best * 1e3:7.1f} ms")
+            continue
+        rate = face_pixels * s * s / best / 1e6
+        print(f"kernel latlong 4096x2048 -> cube-vcross 1024, S={s}: {best * 1e3:7.1f} ms, {rate:6.1f} M supersamples/s (face pixels only)")
+
+
+def _run(cmd: list[str]) -> tuple[float, float]:
+    t = time.perf_counter()
+    proc = subprocess.run(cmd, capture_output=True, text=True)
+    elapsed = time.perf_counter() - t
+    if proc.returncode:
+        raise SystemExit(f"failed: {' '.join(cmd)}\n{proc.stderr}")
+    peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+    return elapsed, peak
+
+
+def bench_e2e(runs: int = 6) -> None:
+    exe = os.path.join(os.path.dirname(sys.executable), "envconv")
+    with tempfile.TemporaryDirectory() as tmp:
+        src_path = os.path.join(tmp, "latlong-2048.exr")
+        envconv.write(_latlong(1024), src_path, bit_depth="float")
+        big_path = os.path.join(tmp, "latlong-4096.exr")
+        envconv.write(_latlong(2048), big_path, bit_depth="float")
+        out_path = os.path.join(tmp, "cross.exr")
+        cases = [
+            ("latlong 4096x2048 float EXR -> cube-vcross 1024", [exe, "convert", big_path, os.path.join(tmp, "big.exr"), "--to", "cube-vcross", "--size", "1024"]),
+            ("latlong 2048x1024 float EXR -> cube-vcross 512", [exe, "convert", src_path, out_path, "--to", "cube-vcross", "--size", "512"]),
+            ("cube-vcross 512 -> latlong 2048x1024", [exe, "convert", out_path, os.path.join(tmp, "back.exr"), "--to", "latlong", "--size", "1024"]),
+        ]  # fmt: skip
+        for label, cmd in cases:
+            _run(cmd)  # first run: may compile
+            times = [_run(cmd)[0] for _ in range(runs)]
+            peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
+            print(f"e2e {label}: median {statistics.median(times):.3f} s, best {min(times):.3f} s over {runs} runs (peak RSS of any child so far {peak:.0f} MB)")
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "import envconv.cli"], check=True)
+        print(f"import envconv.cli: {time.perf_counter() - start:.3f} s (process start included)")
+
+
+# --- mip chains (issue 3) -------------------------------------------------------------------
+
+
+def bench_mips(repeats: int = 7) -> None:
+    """Whole mip chain vs level 0 alone: lat-long 2048x1024 -> cube-vcross 512, in process.
+
+    Equivalent command: envconv convert latlong-2048.exr cross.exr --to cube-vcross --size 512 --mips
+    """
+    src = _latlong(1024)
+    for mips in (None, True):
+        envconv.convert(src, "cube-vcross", size=512, mips=mips)  # warm-up / compile
+    times = {None: [], True: []}
+    for _ in range(repeats):
+        for mips in (None, True):  # interleaved, so machine load hits both alike
+            start = time.perf_counter()
+            envconv.convert(src, "cube-vcross", size=512, mips=mips)
+            times[mips].append(time.perf_counter() - start)
+    level0, chain = statistics.median(times[None]), statistics.median(times[True])
+    print(f"mips latlong 2048x1024 -> cube-vcross 512: level 0 {level0 * 1e3:.0f} ms, full chain (12 levels) {chain * 1e3:.0f} ms, ratio {chain / level0:.2f}")
+
+
+def main(argv: list[str]) -> None:
+    which = argv[1:] or ["kernel", "e2e", "mips"]
+    print(f"envconv {envconv.__version__}, numpy {np.__version__}, {os.cpu_count()} cores")
+    if "kernel" in which:
+        bench_kernel()
+    if "e2e" in which:
+        bench_e2e()
+    if "mips" in which:
+        bench_mips()
+
+
+if __name__ == "__main__":
+    main(sys.argv)
