@@ -14,11 +14,13 @@ size (default)
     circle (see :func:`envconv.geometry.horizon_pitch`; k = π for lat-long, ≈1.68 for cubes).
 samples="auto"
     Adaptive, per pixel: a pixel whose edge spans ``f`` source pixels there takes
-    ``clamp(ceil(f - 0.2), 1, 32)`` sub-samples along that edge (measured along each axis, so a
-    cube face read from a lat-long's polar rows, or an angular map's rim, gets as many as it
-    needs), so sub-samples are never much more than one source pixel apart and every source
-    texel under the pixel is visited: nothing aliases, and a one-pixel highlight keeps its
-    energy. Near 1:1 this is one sample per pixel, as sharp as a correct single-tap converter.
+    ``clamp(ceil(2f - 3), 1, 32)`` sub-samples along that edge, measured along each axis (so
+    a cube face read from a lat-long's polar rows, or an angular map's rim, gets them where it
+    needs them). In a reduction sub-samples are about half a texel apart, so every texel under
+    the pixel is read and nothing aliases, and a one-texel highlight keeps its energy. Up to
+    f = 2 a pixel takes one sample: as sharp as a correct single-tap converter (one bilinear tap
+    reads 2 × 2 texels, so no texel is skipped), since averaging bilinear taps there only blurs
+    (pass ``samples=2`` or more to trade sharpness for exact highlight energy near 1:1). Pixels cut by a rim or a cell edge take at least 8 × 8.
     A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
     With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
     of output to source pixel pitch on the horizon, so that every level is the exact block

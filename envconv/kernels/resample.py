@@ -102,6 +102,31 @@ def _auto_count(footprint):
 
 
 @jit_inline
+def _one_sided_span(
+    sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam, rot, fill,
+    face, px, py, step_x, step_y, sx0, sy0, cell0,
+):  # fmt: skip
+    """Source pixels per output pixel along (step_x, step_y), by a forward or backward
+    difference of a hundredth of a pixel, whichever stays in one output face and one source
+    cell and moves less (the other may jump across a seam); -1 when neither does."""
+    delta = 0.01
+    best = -1.0
+    for side in (1.0, -1.0):
+        qx = px + side * delta * step_x
+        qy = py + side * delta * step_y
+        qface, qa, qb, readable, valid = _output_sample(dgeo, d_cell_face, d_cell_turns, qx, qy, fill)
+        if not readable or qface != face:
+            continue
+        sx, sy, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, qa, qb, rot)
+        if cell != cell0:
+            continue
+        span = math.hypot(sx - sx0, sy - sy0) / delta
+        if best < 0.0 or span < best:
+            best = span
+    return best
+
+
+@jit_inline
 def _pixel_footprint(
     sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam,
     i, j, scale_x, scale_y, rot, fill,
@@ -110,9 +135,10 @@ def _pixel_footprint(
 
     From the Jacobian of the map output point → source point, by differences over a hundredth
     of a pixel: anisotropic, so a mirror ball's rim (radially squeezed) or a lat-long's polar
-    rows (stretched in x) get their sub-samples along the axis that needs them. Where the
-    difference crosses a source seam, the isotropic √(Ω_out / Ω_in) of the pixel solid angles
-    is used instead. Returns (-1, -1) when the centre holds no direction (outside a disk).
+    rows (stretched in x) get their sub-samples along the axis that needs them. Each difference
+    is taken on the side that does not cross a seam (a lat-long's wrap, a face edge, an output
+    cell edge); where both sides do, the isotropic √(Ω_out / Ω_in) of the pixel solid angles is
+    used instead. Returns (-1, -1) when the centre holds no direction (outside a disk).
     """
     px = (i + 0.5) * scale_x
     py = (j + 0.5) * scale_y
@@ -120,20 +146,16 @@ def _pixel_footprint(
     if not readable:
         return -1.0, -1.0
     sx0, sy0, cell0 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
-    delta = 0.01
-    face1, a1, b1, ok1, valid1 = _output_sample(
-        dgeo, d_cell_face, d_cell_turns, px + delta * scale_x, py, fill
-    )
-    face2, a2, b2, ok2, valid2 = _output_sample(
-        dgeo, d_cell_face, d_cell_turns, px, py + delta * scale_y, fill
-    )
-    if ok1 and ok2 and face1 == face and face2 == face:
-        sx1, sy1, cell1 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a1, b1, rot)
-        sx2, sy2, cell2 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a2, b2, rot)
-        span_x = math.hypot(sx1 - sx0, sy1 - sy0) / delta
-        span_y = math.hypot(sx2 - sx0, sy2 - sy0) / delta
-        if cell1 == cell0 and cell2 == cell0 and span_x < sgeo[1] and span_y < sgeo[1]:
-            return span_x, span_y
+    span_x = _one_sided_span(
+        sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam, rot, fill,
+        face, px, py, scale_x, 0.0, sx0, sy0, cell0,
+    )  # fmt: skip
+    span_y = _one_sided_span(
+        sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam, rot, fill,
+        face, px, py, 0.0, scale_y, sx0, sy0, cell0,
+    )  # fmt: skip
+    if span_x >= 0.0 and span_y >= 0.0:
+        return span_x, span_y
     # A seam between the points: the ratio of the two pixels' solid angles (density × area).
     d_area = (2.0 * scale_x / (dgeo[3] * dgeo[1])) * (2.0 * scale_y / dgeo[1])
     s_area = (2.0 / (sgeo[3] * sgeo[1])) * (2.0 / sgeo[1])
@@ -250,15 +272,19 @@ def _map_tile(
 
 # samples <= 0 asks for adaptive sub-sampling: each pixel (or tile) takes nx × ny sub-samples
 # with nx = ceil(footprint_x / AUTO_SPACING - AUTO_SLACK), where footprint_x is the number of
-# source pixels its edge spans there, so sub-samples are never more than about AUTO_SPACING
-# source pixels apart and every source texel under the pixel is visited. Tiles measure the
-# footprint along each axis from their corners, exactly mapped pixels from the Jacobian at their
-# centre (both anisotropic: a lat-long's polar rows, a mirror ball's rim). A pixel whose centre
-# holds no direction (a disk's rim) takes AUTO_RIM_SAMPLES per edge, for its coverage.
+# source pixels its edge spans there. In a reduction (footprint ≥ 2) sub-samples are then about
+# half a texel apart, so every texel under the pixel is read and nothing aliases. Up to a
+# footprint of 2 a pixel takes one sample, as sharp as a single-tap converter: one bilinear tap
+# reads 2 × 2 texels, so taps 2 texels apart still read every texel, and averaging several taps
+# there only blurs (about 1 dB on a same-size round trip, where cube corners reach 1.9).
+# Tiles measure the footprint along each axis from their grid, exactly mapped pixels from the
+# Jacobian at their centre (both anisotropic: a lat-long's polar rows, a mirror ball's rim). A
+# pixel that is not wholly inside one cell's valid region (a disk's rim, a cell edge) takes at
+# least AUTO_EDGE_SAMPLES per edge, so that its coverage (alpha) is exact to 1/AUTO_EDGE_SAMPLES².
 AUTO_SPACING = 0.5
-AUTO_SLACK = 0.2
+AUTO_SLACK = 3.0
 AUTO_MAX_SAMPLES = 32
-AUTO_RIM_SAMPLES = 4
+AUTO_EDGE_SAMPLES = 8
 
 
 @jit_parallel
@@ -336,12 +362,17 @@ def resample_rows(
                                 sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face,
                                 d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill,
                             )  # fmt: skip
-                            if span_x < 0.0:
-                                nx = AUTO_RIM_SAMPLES
-                                ny = AUTO_RIM_SAMPLES
-                            else:
-                                nx = _auto_count(span_x)
-                                ny = _auto_count(span_y)
+                            nx = _auto_count(span_x)
+                            ny = _auto_count(span_y)
+                            # A pixel not wholly in one cell's valid region (a rim, a cell
+                            # edge) needs enough sub-samples for its coverage (alpha).
+                            whole, _ = _tile_face(
+                                dgeo, d_cell_face, d_cell_turns,
+                                i * scale_x, j * scale_y, (i + 1) * scale_x, (j + 1) * scale_y,
+                            )  # fmt: skip
+                            if whole < 0:
+                                nx = max(nx, AUTO_EDGE_SAMPLES)
+                                ny = max(ny, AUTO_EDGE_SAMPLES)
                         wsum, nvalid = _exact_pixel(
                             src, sgeo, s_cell_face, s_cell_turns, s_face_cell,
                             dgeo, d_cell_face, d_cell_turns, dfam,
