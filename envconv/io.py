@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -83,7 +84,7 @@ def read_image(path: str | os.PathLike, level: int = 0):
         pixels = inp.read_image(0, level, 0, spec.nchannels, oiio.FLOAT)
         if pixels is None or inp.has_error:
             raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
-        metadata = {attr.name: attr.value for attr in spec.extra_attribs}
+        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
         channels = tuple(spec.channelnames)
         pixel_type = str(spec.format)
     finally:
@@ -110,7 +111,7 @@ def read_header(path: str | os.PathLike, level: int = 0):
         if level and not inp.seek_subimage(0, level):
             raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
         spec = inp.spec()
-        metadata = {attr.name: attr.value for attr in spec.extra_attribs}
+        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
         return spec.width, spec.height, tuple(spec.channelnames), metadata
     finally:
         inp.close()
@@ -471,8 +472,37 @@ def _level_spec(target, pixels, envmap: EnvMap, face, bit_depth, compression):
     return spec, np.ascontiguousarray(pixels)  # codes/half/float from colorflow.encode_output
 
 
+# TIFF, Radiance HDR and JPEG keep only the attributes their format defines, so envconv's
+# layout tags also travel in ImageDescription, as "envconv:layout=NAME envconv:size=N ...".
+_DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
+_DESCRIPTION_TAG = re.compile(r"\s*envconv:(layout|size|guard|face|level)=(\S+)")
+
+
+def _tags_from_description(metadata: dict[str, Any]) -> dict[str, Any]:
+    """Move envconv tags found in ImageDescription into ``envconv:*`` keys (if not present)."""
+    description = metadata.get("ImageDescription")
+    if not isinstance(description, str) or "envconv:" not in description:
+        return metadata
+    for key, value in _DESCRIPTION_TAG.findall(description):
+        metadata.setdefault(f"envconv:{key}", value)
+    rest = _DESCRIPTION_TAG.sub("", description).strip()
+    if rest:
+        metadata["ImageDescription"] = rest
+    else:
+        del metadata["ImageDescription"]
+    return metadata
+
+
 def _set_envconv_tags(spec, envmap: EnvMap, fmt: str, face: str | None) -> None:
     from . import __version__
+
+    if fmt in _DESCRIPTION_FORMATS:
+        tags = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
+        if face is not None:
+            tags["face"] = face
+        text = " ".join(f"envconv:{k}={v}" for k, v in tags.items())
+        kept = str(envmap.metadata.get("ImageDescription", "")).strip()
+        spec.attribute("ImageDescription", f"{kept} {text}".strip())
 
     spec.attribute("envconv:layout", envmap.layout.name)
     spec.attribute("envconv:size", _int_tag(fmt, envmap.size))

@@ -124,6 +124,22 @@ def test_layout_tag_is_read_back_for_ambiguous_aspects(tmp_path, name):
     assert back.layout.name == name and back.size == 8
 
 
+@pytest.mark.parametrize("ext", [".tif", ".jpg", ".png"])
+def test_layout_and_guard_survive_formats_without_custom_attributes(tmp_path, ext):
+    """TIFF and JPEG keep only their own tags: the layout, size and guard travel in
+    ImageDescription (next to the input's own description), and a 1:1 guarded sphere map is
+    read back as what it is, not refused as ambiguous."""
+    width, height = envconv.layouts.get_layout("sphere").image_size(8, 2)
+    sky = envconv.EnvMap(
+        np.full((height, width, 3), 0.5, np.float32), "sphere", guard=2,
+        metadata={"ImageDescription": "shot at noon"},
+    )  # fmt: skip
+    envconv.write(sky, tmp_path / f"m{ext}", warnings=[])
+    back = envconv.read(tmp_path / f"m{ext}")
+    assert (back.layout.name, back.size, back.guard) == ("sphere", 8, 2)
+    assert back.metadata.get("ImageDescription") == "shot at noon"
+
+
 @pytest.mark.parametrize(
     "value, name", [("LatLong Environment", "latlong"), ("CubeFace Environment", "cube-exr")]
 )
