@@ -169,6 +169,9 @@ def cli(verbose: int) -> None:
     from the source (the last read and the steps that follow it), never from another output.
     """
     level = logging.WARNING - 10 * min(verbose, 2)
+    for number in (logging.DEBUG, logging.INFO, logging.WARNING, logging.ERROR):
+        # "envconv: warning: …" whether a message comes from the library's log or the CLI.
+        logging.addLevelName(number, logging.getLevelName(number).lower())
     logging.basicConfig(level=level, format="envconv: %(levelname)s: %(message)s")
 
 
