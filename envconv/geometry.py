@@ -43,7 +43,7 @@ def uv_to_dir(layout, u, v, size: int = 512, guard: int = 0, fill: bool = False)
     flags : (...) int8
         2 in the valid region, 1 in a guard ring (or anywhere with ``fill``), 0 no data.
     """
-    from .kernels.resample import map_points_to_dirs
+    from .kernels.mapping import map_points_to_dirs
 
     layout = get_layout(layout)
     width, height = layout.image_size(size, guard)
@@ -63,7 +63,7 @@ def uv_to_dir(layout, u, v, size: int = 512, guard: int = 0, fill: bool = False)
 
 def dir_to_uv(layout, dirs, size: int = 512, guard: int = 0):
     """(u, v) of unit directions (..., 3) in a layout of size N with guard G."""
-    from .kernels.resample import map_dirs_to_points
+    from .kernels.mapping import map_dirs_to_points
 
     layout = get_layout(layout)
     width, height = layout.image_size(size, guard)
@@ -95,7 +95,7 @@ def pixel_solid_angles(layout, size: int, guard: int = 0, samples: int = 4) -> n
 
     Sums to 4π over a whole layout (up to the S×S sub-sampling error at disk rims).
     """
-    from .kernels.resample import pixel_solid_angles as kernel
+    from .kernels.mapping import pixel_solid_angles as kernel
 
     layout = get_layout(layout)
     width, height = layout.image_size(size, guard)
@@ -111,7 +111,7 @@ def horizon_pitch(layout) -> float:
     The pitch at a direction is √Ω of a pixel there. Averaged over 360 horizon directions, it
     is k in ``pitch = k / N``: π for lat-long, about 1.68 for cube faces.
     """
-    from .kernels.resample import dir_density
+    from .kernels.mapping import dir_density
 
     layout = get_layout(layout)
     phi = (np.arange(360) + 0.5) * (2 * math.pi / 360)

@@ -242,7 +242,7 @@ def level_solid_angles(
     layout: Layout | str, size: int, guard: int = 0, level: int = 0, samples: int = 4
 ) -> np.ndarray:
     """Solid angle (sr) of the valid part of every texel of mip level ``level``, (H_k, W_k)."""
-    from .kernels.resample import pixel_solid_angles
+    from .kernels.mapping import pixel_solid_angles
 
     layout = get_layout(layout)
     sizes = mip_sizes(layout, size, guard, True)

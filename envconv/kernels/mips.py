@@ -15,7 +15,8 @@ from numba import prange
 from .._jit import jit_parallel
 from .cells import GEO_FAMILY
 from .geometry import density
-from .resample import _output_sample
+from .mapping import output_sample as _output_sample
+from .resample import _store
 
 __all__ = ["pixel_weights", "reduce_blocks"]
 
@@ -61,12 +62,5 @@ def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout):
                         wt += w
                         for c in range(nch):
                             acc[c] += w * src[y, x, c]
-            if wt > 0.0:
-                inv = 1.0 / wt
-                for c in range(nch):
-                    out[j, i, c] = acc[c] * inv
-            else:
-                for c in range(nch):
-                    out[j, i, c] = 0.0
+            _store(out, aout, j, i, acc, wt, at * inv_area)
             wout[j, i] = wt
-            aout[j, i] = at * inv_area
