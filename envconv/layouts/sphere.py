@@ -54,10 +54,19 @@ def face_to_dir(face, a, b):
 @jit
 def dir_to_face(x, y, z):
     """(0, a, b) of a direction; -Z itself lands on the rim at a = 1."""
-    m = 2.0 * math.sqrt(x * x + y * y + (z + 1.0) * (z + 1.0))
-    if m < 1e-300:
+    # (a, b) = (x, -y) / |d + Z|; hypot keeps precision when the components' squares are
+    # subnormal (d within 1e-154 of -Z), and tiny components are scaled up by an exact power of
+    # two first because the kernels' fast-math may divide by multiplying with 1/|d + Z|.
+    zp = z + 1.0
+    m = math.hypot(math.hypot(x, y), zp)
+    if m == 0.0:
         return 0, 1.0, 0.0
-    return 0, 2.0 * x / m, -2.0 * y / m
+    if m < 1e-150:
+        x *= 2.0**600
+        y *= 2.0**600
+        zp *= 2.0**600
+        m = math.hypot(math.hypot(x, y), zp)
+    return 0, x / m, -y / m
 
 
 @jit
