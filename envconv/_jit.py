@@ -2,6 +2,10 @@
 
 Kernels are compiled with ``cache=True`` so that only the first run pays for compilation.
 HDR images carry inf and nan, so the fast-math flags exclude ``nnan`` and ``ninf``.
+
+Developers: numba checks a cached kernel against its own source file only. After editing a
+helper in another module (a layout's map, ``kernels/cells.py``...), delete the stale caches:
+``find envconv -name '*.nbi' -delete -o -name '*.nbc' -delete``.
 """
 
 import numba
