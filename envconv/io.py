@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -93,6 +94,21 @@ def read_image(path: str | os.PathLike, level: int = 0):
     return np.ascontiguousarray(pixels), channels, metadata, pixel_type
 
 
+@contextmanager
+def _open_input(path: str):
+    """An open OIIO ImageInput for ``path`` (closed on exit); one-line errors otherwise."""
+    oiio = _oiio()
+    if not os.path.isfile(path):
+        raise ImageIOError(f"input file not found: {path}")
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
+    try:
+        yield inp
+    finally:
+        inp.close()
+
+
 def read_header(path: str | os.PathLike, level: int = 0):
     """Read one image file's header without its pixels.
 
@@ -100,34 +116,19 @@ def read_header(path: str | os.PathLike, level: int = 0):
     -------
     width, height, channel names, metadata dict (of MIP level ``level``)
     """
-    oiio = _oiio()
     path = os.fspath(path)
-    if not os.path.isfile(path):
-        raise ImageIOError(f"input file not found: {path}")
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
-    try:
+    with _open_input(path) as inp:
         if level and not inp.seek_subimage(0, level):
             raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
         spec = inp.spec()
         metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
         return spec.width, spec.height, tuple(spec.channelnames), metadata
-    finally:
-        inp.close()
 
 
 def read_pixel_type(path: str | os.PathLike) -> str:
     """Pixel type of one image file (``half``, ``float``, ``uint8``...), from its header only."""
-    oiio = _oiio()
-    path = os.fspath(path)
-    inp = oiio.ImageInput.open(path) if os.path.isfile(path) else None
-    if inp is None:
-        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
-    try:
+    with _open_input(os.fspath(path)) as inp:
         return str(inp.spec().format)
-    finally:
-        inp.close()
 
 
 def _first_line(message: str) -> str:
@@ -219,24 +220,16 @@ def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
 
     Multi-file layouts (``{face}`` in the path) report the levels of their first file.
     """
-    oiio = _oiio()
     path = os.fspath(path)
     if "{face}" in path:
         first = _part_path(path, "px")
         path = first if os.path.exists(first) else _part_path(path, "front")
-    if not os.path.isfile(path):
-        raise ImageIOError(f"input file not found: {path}")
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
-    try:
+    with _open_input(path) as inp:
         sizes = []
         while inp.seek_subimage(0, len(sizes)):
             spec = inp.spec()
             sizes.append((spec.width, spec.height))
         return sizes
-    finally:
-        inp.close()
 
 
 def _part_path(template: str, face: str) -> str:
