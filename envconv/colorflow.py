@@ -16,7 +16,7 @@ All resampling happens in scene-linear float32 in the *working space*, linear Re
     2. :func:`to_working` (a no-op for a map from :func:`envconv.io.read`).
     3. ``exposure`` scales colour by 2**stops; then ``clamp_negative`` zeroes negatives.
 
-:func:`prepare_output` / :func:`encode_output` (inside :func:`envconv.io.write`)
+:func:`encode_output` (inside :func:`envconv.io.write`)
     1. The pixel type is ``bit_depth``, else the source's type where the format stores it, else
        the format's default (see ``envconv.io.FORMATS``).
     2. Colour is converted from the map's colour space (its ``oiio:ColorSpace``, the working
@@ -61,7 +61,6 @@ __all__ = [
     "COMPRESSIONS",
     "prepare_input",
     "to_working",
-    "prepare_output",
     "encode_output",
     "plan_output",
     "OutputPlan",
@@ -316,7 +315,7 @@ def encode_output(
 ) -> Encoded:
     """Convert, clip and quantize every level of ``envmap`` for writing to ``path``.
 
-    See the module docstring; :func:`prepare_output` is the same with a shorter result.
+    See the module docstring.
     Clipping is reported for level 0 (lower levels are its averages).
     """
     plan = plan_output(path, envmap.pixel_type, envmap.metadata, output_colorspace, bit_depth,
@@ -356,31 +355,6 @@ def encode_output(
     if plan.format == "openexr" and primaries and "chromaticities" not in metadata:
         metadata["chromaticities"] = _CHROMATICITIES[primaries.group(1)]
     return Encoded(out, plan, metadata, warnings)
-
-
-def prepare_output(
-    envmap: EnvMap,
-    path: str | os.PathLike,
-    output_colorspace: str | None = None,
-    bit_depth: str | None = None,
-    dither: bool = True,
-    ocio_config: str | os.PathLike | None = None,
-):
-    """Pixels of ``envmap`` ready to write to ``path``.
-
-    Returns
-    -------
-    pixels_ready : ndarray or list of ndarray
-        uint8/uint16 codes, float16 or float32, in the output colour space: one (H, W, C)
-        array, or one per MIP level when ``envmap.levels`` is set.
-    pixel_type : str
-        ``"uint8"``, ``"uint16"``, ``"half"`` or ``"float"``.
-    warnings : list of str
-        One line each: clipping, half overflow, negatives dropped by Radiance HDR.
-    """
-    encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config)
-    ready = encoded.levels if envmap.levels is not None else encoded.levels[0]
-    return ready, encoded.plan.pixel_type, encoded.warnings
 
 
 def _clamp_for_rgbe(pixels: np.ndarray) -> tuple[np.ndarray, int]:
