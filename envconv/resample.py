@@ -21,6 +21,10 @@ samples="auto"
     f = 2 a pixel takes one sample: as sharp as a correct single-tap converter (one bilinear tap
     reads 2 × 2 texels, so no texel is skipped), since averaging bilinear taps there only blurs
     (pass ``samples=2`` or more to trade sharpness for exact highlight energy near 1:1). Pixels cut by a rim or a cell edge take at least 8 × 8.
+    With the bilinear filter a lat-long source is read through a horizontal rip-map where a
+    pixel spans at least 8 × 2^k texels along x (its polar rows), and sub-samples are counted
+    in that level's texels (see :mod:`envconv.kernels.ripmap` and ``RIP_MIN_SPAN`` in
+    :mod:`envconv.kernels.resample`).
     A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
     With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
     of output to source pixel pitch on the horizon, so that every level is the exact block
@@ -188,8 +192,10 @@ def convert(
         n_samples or "auto",
         filter,
     )
+    src = np.ascontiguousarray(src)
+    rip, rip_levels = source_rips(envmap, src, n_samples, filter)
     resample_rows(
-        src, *sgeo, dgeo, d_cell_face, d_cell_turns,
+        src, rip, rip_levels, *sgeo, dgeo, d_cell_face, d_cell_turns,
         1.0, 1.0, n_samples or 0, FILTERS[filter], rot, fill, out, coverage,
     )  # fmt: skip
     if (
@@ -231,6 +237,21 @@ def convert(
         pixel_type=envmap.pixel_type,
         levels=[o for o, _ in chain] if mips else None,
     )
+
+
+def source_rips(envmap: EnvMap, src: np.ndarray, samples: int | None, filter: str):
+    """(rip-map, levels) for the kernel: a lat-long source's horizontal rip-map when adaptive
+    sampling with the bilinear filter will read it, else an empty stand-in and 0."""
+    from .kernels.ripmap import build_rips
+
+    if (
+        samples is None
+        and filter == "bilinear"
+        and envmap.layout.name == "latlong"
+        and not envmap.guard
+    ):
+        return build_rips(src)
+    return np.zeros((1, 1, src.shape[2]), np.float32), 0
 
 
 def _check_guard(guard) -> int:

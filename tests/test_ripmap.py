@@ -1,0 +1,155 @@
+"""The lat-long rip-map that auto sampling reads in polar rows (envconv.kernels.ripmap).
+
+Truth: numpy box averages of level 0, the seam-aware bilinear read of envconv.kernels.taps
+(the continued mapping that the known-direction tests pin to CONVENTIONS.md), and
+analytic environments averaged over each output pixel (tests/naive.py).
+"""
+
+from __future__ import annotations
+
+import math
+
+import naive
+import numpy as np
+import pytest
+from numba import njit
+
+import envconv
+from envconv.geometry import kernel_geometry
+from envconv.kernels.resample import resample_rows
+from envconv.kernels.ripmap import build_rips, level_tap, rip_level_count, rip_offset
+from envconv.kernels.taps import FILTER_BILINEAR, accumulate_sample
+
+
+@njit
+def _level_read(rip, start, width, x, y):
+    acc = np.zeros(rip.shape[2])
+    level_tap(rip, start, width, x, y, 1.0, acc)
+    return acc
+
+
+@njit
+def _seam_aware_read(src, geo, cell_face, cell_turns, face_cell, x, y):
+    acc = np.zeros(src.shape[2])
+    tmp = np.zeros(3 * src.shape[2])
+    accumulate_sample(
+        src, geo, cell_face, cell_turns, face_cell, 0, x, y, FILTER_BILINEAR, 1.0, acc, tmp
+    )
+    return acc
+
+
+@pytest.mark.parametrize(
+    "width, levels", [(32, 2), (24, 1), (20, 1), (12, 0), (2048, 8), (6144, 8), (6, 0)]
+)
+def test_level_count_stops_at_odd_or_narrow_levels(width, levels):
+    """A level needs an even width (the pole continuation shifts by half of it) of at least 8,
+    and there are at most 8 levels."""
+    assert rip_level_count(width) == levels
+
+
+def test_levels_are_box_averages_of_level_0():
+    rng = np.random.default_rng(1)
+    src = rng.random((16, 64, 3)).astype(np.float32) * 100
+    rip, levels = build_rips(src)
+    assert levels == 3
+    assert rip.shape == (16, 64 - 64 // 8, 3)
+    for k in range(1, levels + 1):
+        width = 64 >> k
+        start = rip_offset(64, k)
+        expected = src.astype(np.float64).reshape(16, width, 2**k, 3).mean(axis=2)
+        np.testing.assert_allclose(rip[:, start : start + width], expected, rtol=1e-6)
+        # Box averages keep every row's sum: no energy gained or lost.
+        np.testing.assert_allclose(
+            rip[:, start : start + width].sum(axis=1) * 2**k, src.sum(axis=1), rtol=1e-5
+        )
+
+
+def test_no_levels_for_a_width_that_cannot_hold_one():
+    rip, levels = build_rips(np.ones((6, 12, 3), np.float32))
+    assert levels == 0
+
+
+def test_level_tap_on_level_0_matches_the_seam_aware_bilinear_read():
+    """level_tap's own wrap and pole continuation agree with the kernel's continued mapping,
+    everywhere and in particular across the wrap and past both poles."""
+    rng = np.random.default_rng(2)
+    height, width = 16, 32
+    src = rng.random((height, width, 3)).astype(np.float32)
+    layout = envconv.layouts.get_layout("latlong")
+    geo, cell_face, cell_turns, face_cell = kernel_geometry(layout, height, 0)
+    xs = np.concatenate([rng.uniform(0, width, 200), [0.0, 0.1, 0.5, 31.6, 31.99]])
+    ys = np.concatenate([rng.uniform(0, height, 200), [0.0, 0.2, 15.9, 16.0, 8.0]])
+    for x, y in zip(xs, ys, strict=True):
+        got = _level_read(src, 0, width, x, y)
+        expected = _seam_aware_read(src, geo, cell_face, cell_turns, face_cell, x, y)
+        np.testing.assert_allclose(got, expected, rtol=1e-6, atol=1e-7, err_msg=f"{x}, {y}")
+
+
+def test_level_tap_reads_box_averages_and_wraps_on_a_level():
+    rng = np.random.default_rng(3)
+    src = rng.random((8, 64, 1)).astype(np.float32)
+    rip, _ = build_rips(src)
+    k, width = 2, 16
+    start = rip_offset(64, k)
+    boxes = src[:, :, 0].astype(np.float64).reshape(8, width, 4).mean(axis=2)
+    # At a texel centre: that box's mean.
+    np.testing.assert_allclose(_level_read(rip, start, width, 5.5, 3.5)[0], boxes[3, 5], rtol=1e-6)
+    # A quarter texel past the last column: wraps to the first.
+    expected = 0.75 * boxes[3, 15] + 0.25 * boxes[3, 0]
+    np.testing.assert_allclose(_level_read(rip, start, width, 15.75, 3.5)[0], expected, rtol=1e-6)
+    # Above the first row: row 0, half a turn away.
+    expected = 0.5 * boxes[0, 2] + 0.5 * boxes[0, (2 + width // 2) % width]
+    np.testing.assert_allclose(_level_read(rip, start, width, 2.5, 0.0)[0], expected, rtol=1e-6)
+
+
+# Longitudinal stripes: cos(K lon) converges on the poles, so near them a cube pixel spans
+# many periods along x and a handful of texels along y: the case the rip-map is for.
+K = 96
+
+
+def _stripes(dirs):
+    d = np.asarray(dirs, np.float64)
+    lon = np.arctan2(d[..., 0], d[..., 2])
+    value = 1.0 + 0.9 * np.cos(K * lon)
+    return np.repeat(value[..., None], 3, axis=-1)
+
+
+@pytest.fixture(scope="module")
+def stripes_source():
+    return naive.pixel_average("latlong", 512, _stripes, samples=2).astype(np.float32)
+
+
+def _convert_without_rips(source, n, samples):
+    to = envconv.layouts.get_layout("cube-vcross")
+    width, height = to.image_size(n)
+    out = np.empty((height, width, 3), np.float32)
+    alpha = np.empty((height, width), np.float32)
+    dgeo, cf, ct, _ = kernel_geometry(to, n, 0)
+    sgeo = kernel_geometry(source.layout, source.size, 0)
+    no_rips = np.zeros((1, 1, 3), np.float32)
+    resample_rows(
+        source.pixels, no_rips, 0, *sgeo, dgeo, cf, ct, 1.0, 1.0, samples, 1, np.eye(3),
+        False, out, alpha,
+    )  # fmt: skip
+    return out
+
+
+def test_polar_caps_read_through_the_rip_map_match_the_pixel_average(stripes_source):
+    """The top and bottom faces, read through the rip-map, are as close to the analytic pixel
+    average as brute-force sub-sampling of level 0, and far from single-tap moiré."""
+    n = 48
+    source = envconv.EnvMap(stripes_source, "latlong")
+    truth = naive.pixel_average("cube-vcross", n, _stripes, samples=24)
+    caps = np.zeros(truth.shape[:2], bool)
+    caps[0:n, n : 2 * n] = True  # +Y, the top face
+    caps[2 * n : 3 * n, n : 2 * n] = True  # -Y, the bottom face
+
+    def rms(pixels):
+        return float(np.sqrt(np.mean((pixels[caps] - truth[caps]) ** 2)))
+
+    with_rips = rms(envconv.convert(source, "cube-vcross", size=n).pixels)
+    brute_force = rms(_convert_without_rips(source, n, 0))
+    single_tap = rms(_convert_without_rips(source, n, 1))
+    assert with_rips <= max(1.25 * brute_force, 0.01), (with_rips, brute_force)
+    assert single_tap >= 10 * with_rips, (single_tap, with_rips)
+    assert not math.isnan(with_rips)
