@@ -64,7 +64,9 @@ def _exact_pixel(
         py = (j + (sy + 0.5) / ny) * scale_y
         for sx in range(nx):
             px = (i + (sx + 0.5) / nx) * scale_x
-            face, a, b, readable, valid = _output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill)
+            face, a, b, readable, valid = _output_sample(
+                dgeo, d_cell_face, d_cell_turns, px, py, fill
+            )
             if not readable:
                 continue
             if valid:
@@ -106,7 +108,9 @@ def _one_sided_span(
     for side in (1.0, -1.0):
         qx = px + side * delta * step_x
         qy = py + side * delta * step_y
-        qface, qa, qb, readable, valid = _output_sample(dgeo, d_cell_face, d_cell_turns, qx, qy, fill)
+        qface, qa, qb, readable, valid = _output_sample(
+            dgeo, d_cell_face, d_cell_turns, qx, qy, fill
+        )
         if not readable or qface != face:
             continue
         sx, sy, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, qa, qb, rot)
@@ -206,13 +210,15 @@ def _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
 # them. The map is then checked exactly at the four quarter points (1/4 or 3/4 along each axis),
 # where the cubic error of that interpolation is near its largest. If a check is more than
 # INTERP_TOLERANCE source pixels off (a seam, a pole, a wrap, strong curvature), or a grid point
-# lands in another source cell, the tile maps every sub-sample exactly instead. Tiles are only
+# lands in another source cell, the tile is split into four quarters that try again, down to
+# MIN_SUBTILE pixels; a block that still fails maps every sub-sample exactly. Tiles are only
 # tried when they span at most 1/MIN_TILES_PER_CELL of a cell, so that higher-order terms, which
 # the checks could miss, are negligible. Weights (the solid-angle density) are evaluated exactly,
 # at the sub-sample's interpolated (a, b): (a, b) is affine in the image point within one cell,
 # so that interpolation is exact. At INTERP_TOLERANCE = 0.01 texel, a sub-sample's read is off by
 # at most 1% of the difference between neighbouring texels.
 TILE = 8
+MIN_SUBTILE = 2
 INTERP_TOLERANCE = 0.01
 MIN_TILES_PER_CELL = 8
 
@@ -220,7 +226,9 @@ MIN_TILES_PER_CELL = 8
 @jit_inline
 def _lagrange3(g0, g1, g2, f):
     """Quadratic through (0, g0), (0.5, g1), (1, g2), at f."""
-    return g0 * (2.0 * f * f - 3.0 * f + 1.0) + g1 * (4.0 * f - 4.0 * f * f) + g2 * (2.0 * f * f - f)
+    return (
+        g0 * (2.0 * f * f - 3.0 * f + 1.0) + g1 * (4.0 * f - 4.0 * f * f) + g2 * (2.0 * f * f - f)
+    )
 
 
 @jit_inline
@@ -347,194 +355,233 @@ def resample_rows(
         TILE * scale_x * MIN_TILES_PER_CELL <= d_aspect * d_n
         and TILE * scale_y * MIN_TILES_PER_CELL <= d_n
     )
+    # A tile that fails its checks is split into quarters, down to MIN_SUBTILE (4 at S = 1, where
+    # mapping a 2 × 2 block's grid costs more than its 4 samples), and only blocks that fail at
+    # that size map every sub-sample exactly: near a pole or along a seam that is a thin strip.
+    min_subtile = 4 if samples == 1 else MIN_SUBTILE
     for band in prange(n_bands):
         acc = np.zeros(nch, np.float64)
         tmp = np.zeros(3 * nch, np.float64)
         grid = np.empty((3, 3, 2), np.float64)
-        j0 = band * TILE
-        j1 = min(j0 + TILE, height)
-        for i0 in range(0, width, TILE):
-            i1 = min(i0 + TILE, width)
-            x0 = i0 * scale_x
-            y0 = j0 * scale_y
-            x1 = i1 * scale_x
-            y1 = j1 * scale_y
-            if not fill and _tile_in_empty_cell(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
-                for j in range(j0, j1):
-                    for i in range(i0, i1):
-                        out[j, i, :] = 0.0
-                        alpha[j, i] = 0.0
-                continue
-            face = -1
-            cell = -1
-            if may_tile:
-                face, cell = _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1)
-            c00 = -1
-            if face >= 0:
-                a00, b00 = cell_local(dgeo, d_cell_turns, cell, x0, y0)
-                a10, b10 = cell_local(dgeo, d_cell_turns, cell, x1, y0)
-                a01, b01 = cell_local(dgeo, d_cell_turns, cell, x0, y1)
-                da_x = a10 - a00
-                db_x = b10 - b00
-                da_y = a01 - a00
-                db_y = b01 - b00
-                c00 = _map_tile(
+        stack = np.empty((16, 3), np.int64)
+        for tile_i0 in range(0, width, TILE):
+            stack[0, 0] = tile_i0
+            stack[0, 1] = band * TILE
+            stack[0, 2] = TILE
+            depth = 1
+            while depth > 0:
+                depth -= 1
+                i0 = stack[depth, 0]
+                j0 = stack[depth, 1]
+                size = stack[depth, 2]
+                if i0 >= width or j0 >= height:
+                    continue
+                i1 = min(i0 + size, width)
+                j1 = min(j0 + size, height)
+                x0 = i0 * scale_x
+                y0 = j0 * scale_y
+                x1 = i1 * scale_x
+                y1 = j1 * scale_y
+                if not fill and _tile_in_empty_cell(
+                    dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1
+                ):
+                    for j in range(j0, j1):
+                        for i in range(i0, i1):
+                            out[j, i, :] = 0.0
+                            alpha[j, i] = 0.0
+                    continue
+                face = -1
+                cell = -1
+                if may_tile:
+                    face, cell = _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1)
+                c00 = -1
+                if face >= 0:
+                    a00, b00 = cell_local(dgeo, d_cell_turns, cell, x0, y0)
+                    a10, b10 = cell_local(dgeo, d_cell_turns, cell, x1, y0)
+                    a01, b01 = cell_local(dgeo, d_cell_turns, cell, x0, y1)
+                    da_x = a10 - a00
+                    db_x = b10 - b00
+                    da_y = a01 - a00
+                    db_y = b01 - b00
+                    c00 = _map_tile(
                     sgeo, s_face_cell, s_cell_turns, dfam, face, rot,
                     a00, b00, da_x, db_x, da_y, db_y, grid,
                 )  # fmt: skip
-            tiled = c00 >= 0
-            if not tiled:
-                for j in range(j0, j1):
-                    for i in range(i0, i1):
-                        for c in range(nch):
-                            acc[c] = 0.0
-                        nx = samples
-                        ny = samples
-                        level = 0
-                        if adaptive:
-                            span_x, span_y, x_of_x, x_of_y = _pixel_footprint(
+                tiled = c00 >= 0
+                if not tiled and may_tile and size > min_subtile:
+                    half = size // 2
+                    for q in range(4):
+                        stack[depth, 0] = i0 + half * (q % 2)
+                        stack[depth, 1] = j0 + half * (q // 2)
+                        stack[depth, 2] = half
+                        depth += 1
+                    continue
+                if not tiled:
+                    for j in range(j0, j1):
+                        for i in range(i0, i1):
+                            for c in range(nch):
+                                acc[c] = 0.0
+                            nx = samples
+                            ny = samples
+                            level = 0
+                            if adaptive:
+                                span_x, span_y, x_of_x, x_of_y = _pixel_footprint(
                                 sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face,
                                 d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill,
                             )  # fmt: skip
-                            if rip_levels > 0 and x_of_x >= 0.0:
-                                level = _rip_level(x_of_x + x_of_y, rip_levels)
-                            nx = _auto_count(_level_span(span_x, x_of_x, level))
-                            ny = _auto_count(_level_span(span_y, x_of_y, level))
-                            # A pixel not wholly in one cell's valid region (a rim, a cell
-                            # edge) needs enough sub-samples for its coverage (alpha).
-                            whole, _ = _tile_face(
+                                if rip_levels > 0 and x_of_x >= 0.0:
+                                    level = _rip_level(x_of_x + x_of_y, rip_levels)
+                                nx = _auto_count(_level_span(span_x, x_of_x, level))
+                                ny = _auto_count(_level_span(span_y, x_of_y, level))
+                                # A pixel not wholly in one cell's valid region (a rim, a cell
+                                # edge) needs enough sub-samples for its coverage (alpha).
+                                whole, _ = _tile_face(
                                 dgeo, d_cell_face, d_cell_turns,
                                 i * scale_x, j * scale_y, (i + 1) * scale_x, (j + 1) * scale_y,
                             )  # fmt: skip
-                            if whole < 0:
-                                nx = max(nx, AUTO_EDGE_SAMPLES)
-                                ny = max(ny, AUTO_EDGE_SAMPLES)
-                        wsum, nvalid = _exact_pixel(
+                                if whole < 0:
+                                    nx = max(nx, AUTO_EDGE_SAMPLES)
+                                    ny = max(ny, AUTO_EDGE_SAMPLES)
+                            wsum, nvalid = _exact_pixel(
                             src, sgeo, s_cell_face, s_cell_turns, s_face_cell,
                             dgeo, d_cell_face, d_cell_turns, dfam,
                             i, j, scale_x, scale_y, nx, ny, filt, rot, fill, acc, tmp,
                             rip, level,
                         )  # fmt: skip
-                        _store(out, alpha, j, i, acc, wsum, nvalid / (nx * ny))
-                continue
-            bx0 = (c00 % s_cols) * s_cw
-            by0 = (c00 // s_cols) * s_ch
-            bx1 = bx0 + s_cw - 1
-            by1 = by0 + s_ch - 1
-            inv_tw = 1.0 / (i1 - i0)
-            inv_th = 1.0 / (j1 - j0)
-            nx = samples
-            ny = samples
-            level = 0
-            if adaptive:
-                if rip_levels > 0:
-                    x_extent = math.inf
+                            _store(out, alpha, j, i, acc, wsum, nvalid / (nx * ny))
+                    continue
+                bx0 = (c00 % s_cols) * s_cw
+                by0 = (c00 // s_cols) * s_ch
+                bx1 = bx0 + s_cw - 1
+                by1 = by0 + s_ch - 1
+                inv_tw = 1.0 / (i1 - i0)
+                inv_th = 1.0 / (j1 - j0)
+                nx = samples
+                ny = samples
+                level = 0
+                if adaptive:
+                    if rip_levels > 0:
+                        x_extent = math.inf
+                        for k in range(3):
+                            x_extent = min(
+                                x_extent,
+                                abs(grid[k, 2, 0] - grid[k, 0, 0]) * inv_tw
+                                + abs(grid[2, k, 0] - grid[0, k, 0]) * inv_th,
+                            )
+                        level = _rip_level(x_extent, rip_levels)
+                    shrink = 1.0 / (1 << level)
+                    edge_x = 0.0
+                    edge_y = 0.0
                     for k in range(3):
-                        x_extent = min(
-                            x_extent,
-                            abs(grid[k, 2, 0] - grid[k, 0, 0]) * inv_tw
-                            + abs(grid[2, k, 0] - grid[0, k, 0]) * inv_th,
+                        edge_x = max(
+                            edge_x,
+                            math.hypot(
+                                (grid[k, 2, 0] - grid[k, 0, 0]) * shrink,
+                                grid[k, 2, 1] - grid[k, 0, 1],
+                            ),
                         )
-                    level = _rip_level(x_extent, rip_levels)
-                shrink = 1.0 / (1 << level)
-                edge_x = 0.0
-                edge_y = 0.0
-                for k in range(3):
-                    edge_x = max(edge_x, math.hypot((grid[k, 2, 0] - grid[k, 0, 0]) * shrink, grid[k, 2, 1] - grid[k, 0, 1]))
-                    edge_y = max(edge_y, math.hypot((grid[2, k, 0] - grid[0, k, 0]) * shrink, grid[2, k, 1] - grid[0, k, 1]))
-                nx = _auto_count(edge_x * inv_tw)
-                ny = _auto_count(edge_y * inv_th)
-            # Taps read level 0 (src) or a rip-map level, at x_scale · x + x_offset.
-            image = src
-            x_scale = 1.0
-            x_offset = 0.0
-            level_start = 0
-            level_width = s_width
-            if level > 0:
-                image = rip
-                x_scale = 1.0 / (1 << level)
-                level_start = rip_offset(s_width, level)
-                level_width = s_width >> level
-                x_offset = float(level_start)
-                bx0 = level_start
-                bx1 = level_start + level_width - 1
-            inv_nx = 1.0 / nx
-            inv_ny = 1.0 / ny
-            rgb = fast_taps and nch == 3
-            for j in range(j0, j1):
-                for i in range(i0, i1):
-                    for c in range(nch):
-                        acc[c] = 0.0
-                    # Three channels (the common case) accumulate in registers.
-                    acc_r = 0.0
-                    acc_g = 0.0
-                    acc_b = 0.0
-                    wsum = 0.0
-                    for sy in range(ny):
-                        fy = (j - j0 + (sy + 0.5) * inv_ny) * inv_th
-                        # This row of sub-samples: x and y as quadratics in fx, c0 + fx (c1 + fx c2).
-                        q0x = _lagrange3(grid[0, 0, 0], grid[1, 0, 0], grid[2, 0, 0], fy)
-                        q1x = _lagrange3(grid[0, 1, 0], grid[1, 1, 0], grid[2, 1, 0], fy)
-                        q2x = _lagrange3(grid[0, 2, 0], grid[1, 2, 0], grid[2, 2, 0], fy)
-                        q0y = _lagrange3(grid[0, 0, 1], grid[1, 0, 1], grid[2, 0, 1], fy)
-                        q1y = _lagrange3(grid[0, 1, 1], grid[1, 1, 1], grid[2, 1, 1], fy)
-                        q2y = _lagrange3(grid[0, 2, 1], grid[1, 2, 1], grid[2, 2, 1], fy)
-                        c1x = -3.0 * q0x + 4.0 * q1x - q2x
-                        c2x = 2.0 * q0x - 4.0 * q1x + 2.0 * q2x
-                        c1y = -3.0 * q0y + 4.0 * q1y - q2y
-                        c2y = 2.0 * q0y - 4.0 * q1y + 2.0 * q2y
-                        la = a00 + da_y * fy
-                        lb = b00 + db_y * fy
-                        for sx in range(nx):
-                            fx = (i - i0 + (sx + 0.5) * inv_nx) * inv_tw
-                            spx = q0x + fx * (c1x + fx * c2x)
-                            spy = q0y + fx * (c1y + fx * c2y)
-                            w = density(dfam, face, la + da_x * fx, lb + db_x * fx)
-                            wsum += w
-                            tx = spx * x_scale + x_offset - 0.5
-                            ty = spy - 0.5
-                            ix = int(np.floor(tx))
-                            iy = int(np.floor(ty))
-                            if fast_taps and ix >= bx0 and iy >= by0 and ix < bx1 and iy < by1:
-                                tx -= ix
-                                ty -= iy
-                                k00 = w * (1.0 - tx) * (1.0 - ty)
-                                k10 = w * tx * (1.0 - ty)
-                                k01 = w * (1.0 - tx) * ty
-                                k11 = w * tx * ty
-                                if rgb:
-                                    acc_r += (
+                        edge_y = max(
+                            edge_y,
+                            math.hypot(
+                                (grid[2, k, 0] - grid[0, k, 0]) * shrink,
+                                grid[2, k, 1] - grid[0, k, 1],
+                            ),
+                        )
+                    nx = _auto_count(edge_x * inv_tw)
+                    ny = _auto_count(edge_y * inv_th)
+                # Taps read level 0 (src) or a rip-map level, at x_scale · x + x_offset.
+                image = src
+                x_scale = 1.0
+                x_offset = 0.0
+                level_start = 0
+                level_width = s_width
+                if level > 0:
+                    image = rip
+                    x_scale = 1.0 / (1 << level)
+                    level_start = rip_offset(s_width, level)
+                    level_width = s_width >> level
+                    x_offset = float(level_start)
+                    bx0 = level_start
+                    bx1 = level_start + level_width - 1
+                inv_nx = 1.0 / nx
+                inv_ny = 1.0 / ny
+                rgb = fast_taps and nch == 3
+                for j in range(j0, j1):
+                    for i in range(i0, i1):
+                        for c in range(nch):
+                            acc[c] = 0.0
+                        # Three channels (the common case) accumulate in registers.
+                        acc_r = 0.0
+                        acc_g = 0.0
+                        acc_b = 0.0
+                        wsum = 0.0
+                        for sy in range(ny):
+                            fy = (j - j0 + (sy + 0.5) * inv_ny) * inv_th
+                            # This row of sub-samples: x and y as quadratics in fx, c0 + fx (c1 + fx c2).
+                            q0x = _lagrange3(grid[0, 0, 0], grid[1, 0, 0], grid[2, 0, 0], fy)
+                            q1x = _lagrange3(grid[0, 1, 0], grid[1, 1, 0], grid[2, 1, 0], fy)
+                            q2x = _lagrange3(grid[0, 2, 0], grid[1, 2, 0], grid[2, 2, 0], fy)
+                            q0y = _lagrange3(grid[0, 0, 1], grid[1, 0, 1], grid[2, 0, 1], fy)
+                            q1y = _lagrange3(grid[0, 1, 1], grid[1, 1, 1], grid[2, 1, 1], fy)
+                            q2y = _lagrange3(grid[0, 2, 1], grid[1, 2, 1], grid[2, 2, 1], fy)
+                            c1x = -3.0 * q0x + 4.0 * q1x - q2x
+                            c2x = 2.0 * q0x - 4.0 * q1x + 2.0 * q2x
+                            c1y = -3.0 * q0y + 4.0 * q1y - q2y
+                            c2y = 2.0 * q0y - 4.0 * q1y + 2.0 * q2y
+                            la = a00 + da_y * fy
+                            lb = b00 + db_y * fy
+                            for sx in range(nx):
+                                fx = (i - i0 + (sx + 0.5) * inv_nx) * inv_tw
+                                spx = q0x + fx * (c1x + fx * c2x)
+                                spy = q0y + fx * (c1y + fx * c2y)
+                                w = density(dfam, face, la + da_x * fx, lb + db_x * fx)
+                                wsum += w
+                                tx = spx * x_scale + x_offset - 0.5
+                                ty = spy - 0.5
+                                ix = int(np.floor(tx))
+                                iy = int(np.floor(ty))
+                                if fast_taps and ix >= bx0 and iy >= by0 and ix < bx1 and iy < by1:
+                                    tx -= ix
+                                    ty -= iy
+                                    k00 = w * (1.0 - tx) * (1.0 - ty)
+                                    k10 = w * tx * (1.0 - ty)
+                                    k01 = w * (1.0 - tx) * ty
+                                    k11 = w * tx * ty
+                                    if rgb:
+                                        acc_r += (
                                         k00 * image[iy, ix, 0] + k10 * image[iy, ix + 1, 0]
                                         + k01 * image[iy + 1, ix, 0] + k11 * image[iy + 1, ix + 1, 0]
                                     )  # fmt: skip
-                                    acc_g += (
+                                        acc_g += (
                                         k00 * image[iy, ix, 1] + k10 * image[iy, ix + 1, 1]
                                         + k01 * image[iy + 1, ix, 1] + k11 * image[iy + 1, ix + 1, 1]
                                     )  # fmt: skip
-                                    acc_b += (
+                                        acc_b += (
                                         k00 * image[iy, ix, 2] + k10 * image[iy, ix + 1, 2]
                                         + k01 * image[iy + 1, ix, 2] + k11 * image[iy + 1, ix + 1, 2]
                                     )  # fmt: skip
-                                    continue
-                                for c in range(nch):
-                                    acc[c] += (
-                                        k00 * image[iy, ix, c]
-                                        + k10 * image[iy, ix + 1, c]
-                                        + k01 * image[iy + 1, ix, c]
-                                        + k11 * image[iy + 1, ix + 1, c]
+                                        continue
+                                    for c in range(nch):
+                                        acc[c] += (
+                                            k00 * image[iy, ix, c]
+                                            + k10 * image[iy, ix + 1, c]
+                                            + k01 * image[iy + 1, ix, c]
+                                            + k11 * image[iy + 1, ix + 1, c]
+                                        )
+                                elif level > 0:
+                                    level_tap(
+                                        rip, level_start, level_width, spx * x_scale, spy, w, acc
                                     )
-                            elif level > 0:
-                                level_tap(rip, level_start, level_width, spx * x_scale, spy, w, acc)
-                            else:
-                                accumulate_sample(
+                                else:
+                                    accumulate_sample(
                                     src, sgeo, s_cell_face, s_cell_turns, s_face_cell, c00,
                                     spx, spy, filt, w, acc, tmp,
                                 )  # fmt: skip
-                    if rgb:
-                        acc[0] += acc_r
-                        acc[1] += acc_g
-                        acc[2] += acc_b
-                    _store(out, alpha, j, i, acc, wsum, 1.0)
+                        if rgb:
+                            acc[0] += acc_r
+                            acc[1] += acc_g
+                            acc[2] += acc_b
+                        _store(out, alpha, j, i, acc, wsum, 1.0)
 
 
 @jit_inline
