@@ -213,13 +213,15 @@ def _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
 # lands in another source cell, the tile is split into four quarters that try again, down to
 # MIN_SUBTILE pixels; a block that still fails maps every sub-sample exactly. Tiles are only
 # tried when they span at most 1/MIN_TILES_PER_CELL of a cell, so that higher-order terms, which
-# the checks could miss, are negligible. Weights (the solid-angle density) are evaluated exactly,
-# at the sub-sample's interpolated (a, b): (a, b) is affine in the image point within one cell,
-# so that interpolation is exact. At INTERP_TOLERANCE = 0.01 texel, a sub-sample's read is off by
-# at most 1% of the difference between neighbouring texels.
+# the checks could miss, are negligible. At INTERP_TOLERANCE = 0.01 texel, a sub-sample's read
+# is off by at most 1% of the difference between neighbouring texels. Weights (the output
+# layout's solid-angle density) are interpolated the same way and checked to WEIGHT_TOLERANCE,
+# relative: an error that small and that smooth changes a pixel's mean by about 1e-4 of its
+# contrast, and no pixel's solid angle (its share of the energy) depends on it.
 TILE = 8
 MIN_SUBTILE = 2
 INTERP_TOLERANCE = 0.01
+WEIGHT_TOLERANCE = 1e-3
 MIN_TILES_PER_CELL = 8
 
 
@@ -235,10 +237,12 @@ def _lagrange3(g0, g1, g2, f):
 def _map_tile(
     sgeo, s_face_cell, s_cell_turns, dfam, face, rot, a00, b00, da_x, db_x, da_y, db_y, grid,
 ):  # fmt: skip
-    """Map the tile's 3 × 3 grid into ``grid`` (3, 3, 2) and check the quarter points.
+    """Map the tile's 3 × 3 grid into ``grid`` (3, 3, 3): source x, source y and the output
+    layout's solid-angle density, and check the quarter points.
 
     Returns the source cell when biquadratic interpolation of the grid is within
-    INTERP_TOLERANCE of the exact map and the whole grid lies in that cell, else -1.
+    INTERP_TOLERANCE texels of the exact map, and within WEIGHT_TOLERANCE (relative) of the
+    exact density, and the whole grid lies in that cell, else -1.
     """
     cell0 = -1
     for r in range(3):
@@ -252,6 +256,7 @@ def _map_tile(
                 return -1
             grid[r, c, 0] = px
             grid[r, c, 1] = py
+            grid[r, c, 2] = density(dfam, face, a, b)
     for q in range(4):
         fx = 0.25 + 0.5 * (q % 2)
         fy = 0.25 + 0.5 * (q // 2)
@@ -260,15 +265,23 @@ def _map_tile(
         px, py, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
         if cell != cell0:
             return -1
-        for k in range(2):
-            value = px if k == 0 else py
+        for k in range(3):
+            if k == 0:
+                value = px
+                tolerance = INTERP_TOLERANCE
+            elif k == 1:
+                value = py
+                tolerance = INTERP_TOLERANCE
+            else:
+                value = density(dfam, face, a, b)
+                tolerance = WEIGHT_TOLERANCE * value
             interpolated = _lagrange3(
                 _lagrange3(grid[0, 0, k], grid[0, 1, k], grid[0, 2, k], fx),
                 _lagrange3(grid[1, 0, k], grid[1, 1, k], grid[1, 2, k], fx),
                 _lagrange3(grid[2, 0, k], grid[2, 1, k], grid[2, 2, k], fx),
                 fy,
             )
-            if abs(interpolated - value) > INTERP_TOLERANCE:
+            if not abs(interpolated - value) <= tolerance:
                 return -1
     return cell0
 
@@ -288,6 +301,8 @@ AUTO_SPACING = 0.5
 AUTO_SLACK = 3.0
 AUTO_MAX_SAMPLES = 32
 AUTO_EDGE_SAMPLES = 8
+# The most sub-samples per pixel edge a tile may take (samples=64 is the API's limit).
+MAX_ROW_SAMPLES = 64
 
 # With a rip-map (a lat-long source, adaptive sampling, bilinear filter; see
 # envconv.kernels.ripmap), a pixel whose footprint spans X level-0 texels along the source's x
@@ -354,6 +369,7 @@ def resample_rows(
     may_tile = (
         TILE * scale_x * MIN_TILES_PER_CELL <= d_aspect * d_n
         and TILE * scale_y * MIN_TILES_PER_CELL <= d_n
+        and samples <= MAX_ROW_SAMPLES
     )
     # A tile that fails its checks is split into quarters, down to MIN_SUBTILE (4 at S = 1, where
     # mapping a 2 × 2 block's grid costs more than its 4 samples), and only blocks that fail at
@@ -362,7 +378,8 @@ def resample_rows(
     for band in prange(n_bands):
         acc = np.zeros(nch, np.float64)
         tmp = np.zeros(3 * nch, np.float64)
-        grid = np.empty((3, 3, 2), np.float64)
+        grid = np.empty((3, 3, 3), np.float64)
+        rows = np.empty((TILE * MAX_ROW_SAMPLES, 9), np.float64)
         stack = np.empty((16, 3), np.int64)
         for tile_i0 in range(0, width, TILE):
             stack[0, 0] = tile_i0
@@ -506,6 +523,18 @@ def resample_rows(
                 inv_nx = 1.0 / nx
                 inv_ny = 1.0 / ny
                 rgb = fast_taps and nch == 3
+                # Each row of sub-samples (j, sy) has source x, source y and weight as
+                # quadratics in fx, q0 + fx (c1 + fx c2): 9 numbers per row, shared by the
+                # tile's pixels along it.
+                for r in range((j1 - j0) * ny):
+                    fy = (r // ny + (r % ny + 0.5) * inv_ny) * inv_th
+                    for k in range(3):
+                        q0 = _lagrange3(grid[0, 0, k], grid[1, 0, k], grid[2, 0, k], fy)
+                        q1 = _lagrange3(grid[0, 1, k], grid[1, 1, k], grid[2, 1, k], fy)
+                        q2 = _lagrange3(grid[0, 2, k], grid[1, 2, k], grid[2, 2, k], fy)
+                        rows[r, 3 * k] = q0
+                        rows[r, 3 * k + 1] = -3.0 * q0 + 4.0 * q1 - q2
+                        rows[r, 3 * k + 2] = 2.0 * q0 - 4.0 * q1 + 2.0 * q2
                 for j in range(j0, j1):
                     for i in range(i0, i1):
                         for c in range(nch):
@@ -516,25 +545,21 @@ def resample_rows(
                         acc_b = 0.0
                         wsum = 0.0
                         for sy in range(ny):
-                            fy = (j - j0 + (sy + 0.5) * inv_ny) * inv_th
-                            # This row of sub-samples: x and y as quadratics in fx, c0 + fx (c1 + fx c2).
-                            q0x = _lagrange3(grid[0, 0, 0], grid[1, 0, 0], grid[2, 0, 0], fy)
-                            q1x = _lagrange3(grid[0, 1, 0], grid[1, 1, 0], grid[2, 1, 0], fy)
-                            q2x = _lagrange3(grid[0, 2, 0], grid[1, 2, 0], grid[2, 2, 0], fy)
-                            q0y = _lagrange3(grid[0, 0, 1], grid[1, 0, 1], grid[2, 0, 1], fy)
-                            q1y = _lagrange3(grid[0, 1, 1], grid[1, 1, 1], grid[2, 1, 1], fy)
-                            q2y = _lagrange3(grid[0, 2, 1], grid[1, 2, 1], grid[2, 2, 1], fy)
-                            c1x = -3.0 * q0x + 4.0 * q1x - q2x
-                            c2x = 2.0 * q0x - 4.0 * q1x + 2.0 * q2x
-                            c1y = -3.0 * q0y + 4.0 * q1y - q2y
-                            c2y = 2.0 * q0y - 4.0 * q1y + 2.0 * q2y
-                            la = a00 + da_y * fy
-                            lb = b00 + db_y * fy
+                            r = (j - j0) * ny + sy
+                            q0x = rows[r, 0]
+                            c1x = rows[r, 1]
+                            c2x = rows[r, 2]
+                            q0y = rows[r, 3]
+                            c1y = rows[r, 4]
+                            c2y = rows[r, 5]
+                            q0w = rows[r, 6]
+                            c1w = rows[r, 7]
+                            c2w = rows[r, 8]
                             for sx in range(nx):
                                 fx = (i - i0 + (sx + 0.5) * inv_nx) * inv_tw
                                 spx = q0x + fx * (c1x + fx * c2x)
                                 spy = q0y + fx * (c1y + fx * c2y)
-                                w = density(dfam, face, la + da_x * fx, lb + db_x * fx)
+                                w = q0w + fx * (c1w + fx * c2w)
                                 wsum += w
                                 tx = spx * x_scale + x_offset - 0.5
                                 ty = spy - 0.5
