@@ -82,7 +82,11 @@ def read_image(path: str | os.PathLike, level: int = 0):
         if level and not inp.seek_subimage(0, level):
             raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
         spec = inp.spec()
-        pixels = inp.read_image(0, level, 0, spec.nchannels, oiio.FLOAT)
+        pixels = None
+        if level == 0 and _plain_exr(inp, spec):
+            pixels = _read_exr_pixels(path, spec)
+        if pixels is None:
+            pixels = inp.read_image(0, level, 0, spec.nchannels, oiio.FLOAT)
         if pixels is None or inp.has_error:
             raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
         metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
@@ -92,6 +96,45 @@ def read_image(path: str | os.PathLike, level: int = 0):
         inp.close()
     pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
     return np.ascontiguousarray(pixels), channels, metadata, pixel_type
+
+
+def _plain_exr(inp, spec) -> bool:
+    """True for a single-part scanline OpenEXR file of half or float channels whose data
+    window is its display window: what :func:`_read_exr_pixels` decodes."""
+    return (
+        inp.format_name() == "openexr"
+        and spec.tile_width == 0
+        and not spec.deep
+        and spec.get_int_attribute("oiio:subimages", 1) == 1
+        and (spec.x, spec.y, spec.width, spec.height)
+        == (spec.full_x, spec.full_y, spec.full_width, spec.full_height)
+        and str(spec.format) in ("half", "float")
+        and all(str(f) in ("half", "float") for f in spec.channelformats)
+    )
+
+
+def _read_exr_pixels(path: str, spec):
+    """Pixels (H, W, C) float32 of a plain scanline EXR, in ``spec``'s channel order, decoded by
+    the OpenEXR library itself: its zip decoder (libdeflate) takes half the time of the one
+    OIIO's wheel links. None when it declines or fails, and OIIO reads the file instead."""
+    import OpenEXR
+
+    names = list(spec.channelnames)
+    grouped = names in (["R", "G", "B"], ["R", "G", "B", "A"])
+    try:
+        with OpenEXR.File(path, separate_channels=not grouped) as exr:
+            channels = exr.channels()
+            if grouped:
+                data = channels.get("".join(names))
+                return None if data is None else data.pixels.astype(np.float32, copy=False)
+            pixels = np.empty((spec.height, spec.width, len(names)), np.float32)
+            for k, name in enumerate(names):
+                if name not in channels:
+                    return None
+                pixels[..., k] = channels[name].pixels
+            return pixels
+    except Exception:  # damaged, or subsampled channels: OIIO reads it or says why not
+        return None
 
 
 @contextmanager

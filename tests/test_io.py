@@ -353,3 +353,96 @@ def test_input_is_never_modified(tmp_path, ext):
     envconv.read(source)
     assert file_state(source) == before
     assert sorted(os.listdir(tmp_path)) == sorted([f"in{ext}", "out.exr"])
+
+
+# ---------------------------------------------------------------------------------------------
+# Plain scanline EXRs are decoded by the OpenEXR library; the pixels must be OIIO's, exactly.
+
+
+def _oiio_exr(path, pixels, names, pixel_type, tile=0, data_offset=0):
+    """Write ``pixels`` with OIIO directly (not through envconv.write)."""
+    import OpenImageIO as oiio
+
+    height, width, nch = pixels.shape
+    spec = oiio.ImageSpec(width, height, nch, pixel_type)
+    spec.channelnames = tuple(names)
+    if tile:
+        spec.tile_width = spec.tile_height = tile
+    if data_offset:
+        spec.x = spec.y = data_offset
+        spec.full_x = spec.full_y = 0
+        spec.full_width, spec.full_height = width + data_offset, height + data_offset
+    out = oiio.ImageOutput.create(os.fspath(path))
+    assert out.open(os.fspath(path), spec)
+    assert out.write_image(pixels)
+    out.close()
+
+
+def _oiio_pixels(path):
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(os.fspath(path))
+    pixels = inp.read_image(oiio.FLOAT)
+    inp.close()
+    return pixels
+
+
+@pytest.mark.parametrize(
+    "names, pixel_type",
+    [
+        (("R", "G", "B"), "float"),
+        (("R", "G", "B", "A"), "half"),
+        (("Y",), "float"),
+        (("R", "G", "B", "A", "Z"), "float"),
+        (("diffuse.R", "diffuse.G", "diffuse.B"), "half"),
+    ],
+)
+def test_plain_exr_reads_as_oiio_does(tmp_path, monkeypatch, names, pixel_type):
+    import envconv.io as io_module
+
+    rng = np.random.default_rng(4)
+    pixels = (rng.standard_normal((12, 24, len(names))) * 100).astype(np.float32)
+    pixels[0, 0, 0], pixels[1, 1, 0], pixels[2, 2, 0] = np.inf, -np.inf, np.nan
+    path = tmp_path / "plain.exr"
+    _oiio_exr(path, pixels, names, pixel_type)
+    decoded = []
+    original = io_module._read_exr_pixels
+    monkeypatch.setattr(
+        io_module, "_read_exr_pixels", lambda *a: decoded.append(1) or original(*a)
+    )
+    got, channels, _, stored = read_image(path)
+    assert decoded and stored == pixel_type
+    expected = _oiio_pixels(path)
+    assert channels == tuple(_oiio_channel_names(path))
+    np.testing.assert_array_equal(got, expected)
+
+
+def _oiio_channel_names(path):
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(os.fspath(path))
+    names = inp.spec().channelnames
+    inp.close()
+    return names
+
+
+@pytest.mark.parametrize("kind", ["tiled", "data window"])
+def test_other_exrs_are_read_by_oiio(tmp_path, kind):
+    pixels = np.random.default_rng(5).random((16, 32, 3)).astype(np.float32)
+    path = tmp_path / "other.exr"
+    if kind == "tiled":
+        _oiio_exr(path, pixels, "RGB", "float", tile=16)
+    else:
+        _oiio_exr(path, pixels, "RGB", "float", data_offset=2)
+    got, *_ = read_image(path)
+    np.testing.assert_array_equal(got, _oiio_pixels(path).reshape(got.shape))
+
+
+def test_truncated_exr_is_a_one_line_error(tmp_path):
+    path = tmp_path / "cut.exr"
+    _oiio_exr(path, np.ones((64, 128, 3), np.float32), "RGB", "float")
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) // 2])
+    with pytest.raises(ImageIOError) as info:
+        envconv.read(path)
+    assert "\n" not in str(info.value)
