@@ -205,7 +205,8 @@ def _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
     return face, cell
 
 
-# Tiles of TILE × TILE output pixels map a 3 × 3 grid of points exactly (corners, edge midpoints,
+# Tiles of TILE × TILE output pixels (TILE / 2 when a cell is too small for TILE; see
+# MIN_TILES_PER_CELL) map a 3 × 3 grid of points exactly (corners, edge midpoints,
 # centre); the source position of every sub-sample inside is interpolated biquadratically from
 # them. The map is then checked exactly at the four quarter points (1/4 or 3/4 along each axis),
 # where the cubic error of that interpolation is near its largest. If a check is more than
@@ -218,7 +219,7 @@ def _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
 # layout's solid-angle density) are interpolated the same way and checked to WEIGHT_TOLERANCE,
 # relative: an error that small and that smooth changes a pixel's mean by about 1e-4 of its
 # contrast, and no pixel's solid angle (its share of the energy) depends on it.
-TILE = 8
+TILE = 16
 MIN_SUBTILE = 2
 INTERP_TOLERANCE = 0.01
 WEIGHT_TOLERANCE = 1e-3
@@ -367,10 +368,15 @@ def resample_rows(
     # Tiles small enough against an output cell (level-0 pixels) for the checks to hold.
     d_n, d_aspect = dgeo[1], dgeo[3]
     may_tile = (
-        TILE * scale_x * MIN_TILES_PER_CELL <= d_aspect * d_n
-        and TILE * scale_y * MIN_TILES_PER_CELL <= d_n
+        (TILE // 2) * scale_x * MIN_TILES_PER_CELL <= d_aspect * d_n
+        and (TILE // 2) * scale_y * MIN_TILES_PER_CELL <= d_n
         and samples <= MAX_ROW_SAMPLES
     )
+    largest_tile = TILE // 2
+    if TILE * scale_x * MIN_TILES_PER_CELL <= d_aspect * d_n and (
+        TILE * scale_y * MIN_TILES_PER_CELL <= d_n
+    ):
+        largest_tile = TILE
     # A tile that fails its checks is split into quarters, down to MIN_SUBTILE (4 at S = 1, where
     # mapping a 2 × 2 block's grid costs more than its 4 samples), and only blocks that fail at
     # that size map every sub-sample exactly: near a pole or along a seam that is a thin strip.
@@ -409,7 +415,7 @@ def resample_rows(
                     continue
                 face = -1
                 cell = -1
-                if may_tile:
+                if may_tile and size <= largest_tile:
                     face, cell = _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1)
                 c00 = -1
                 if face >= 0:
