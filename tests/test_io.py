@@ -497,6 +497,7 @@ def test_plain_exr_writer_matches_oiio(
     envmap = envconv.EnvMap(pixels, layout, channels=tuple(names), metadata=dict(metadata))
     used = []
     original = io_module._write_plain_exr
+    monkeypatch.setattr(io_module, "_prefer_openexr_writer", lambda spec: True)
     monkeypatch.setattr(
         io_module, "_write_plain_exr", lambda *a: used.append(1) or original(*a)
     )
@@ -516,6 +517,7 @@ def test_exr_attributes_oiio_must_translate_go_through_oiio(tmp_path, monkeypatc
 
     calls = []
     original = io_module._write_plain_exr
+    monkeypatch.setattr(io_module, "_prefer_openexr_writer", lambda spec: True)
     monkeypatch.setattr(
         io_module, "_write_plain_exr", lambda *a: calls.append(original(*a)) or calls[-1]
     )
@@ -526,3 +528,25 @@ def test_exr_attributes_oiio_must_translate_go_through_oiio(tmp_path, monkeypatc
     assert calls == [False]
     attributes, _, _ = _oiio_attributes(tmp_path / "m.exr")
     assert attributes["Copyright"] == ("string", "someone")
+
+
+def test_openexr_writer_is_preferred_where_it_is_faster():
+    """One thread (batch workers) or cheap compression: OpenEXR; zip on several threads: OIIO."""
+    import OpenImageIO as oiio
+
+    from envconv.io import _prefer_openexr_writer
+
+    def spec(compression):
+        s = oiio.ImageSpec(4, 4, 3, oiio.FLOAT)
+        s.attribute("compression", compression)
+        return s
+
+    threads = oiio.get_int_attribute("exr_threads")
+    try:
+        oiio.attribute("exr_threads", 2)
+        assert _prefer_openexr_writer(spec("none")) and _prefer_openexr_writer(spec("rle"))
+        assert not _prefer_openexr_writer(spec("zip"))
+        oiio.attribute("exr_threads", 1)
+        assert _prefer_openexr_writer(spec("zip"))
+    finally:
+        oiio.attribute("exr_threads", threads)
