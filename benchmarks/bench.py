@@ -5,6 +5,8 @@ Run by hand and quote the figures; nothing here is a test.
     python benchmarks/bench.py              # everything
     python benchmarks/bench.py kernel       # supersamples per second in the kernel
     python benchmarks/bench.py e2e          # whole-process lat-long 2048x1024 EXR -> cube-vcross 512
+    python benchmarks/bench.py batch        # envconv batch of 20 such files, -j 1 and -j 2
+    python benchmarks/bench.py mips         # a whole mip chain against level 0 alone
 
 Kernel throughput counts output supersamples (pixels × S²) per second of kernel wall time, for
 lat-long 4096×2048 → cube-vcross 1024 on all cores, after one warm-up run. End-to-end time runs
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import os
 import resource
+import shutil
 import statistics
 import subprocess
 import sys
@@ -83,8 +86,17 @@ def _run(cmd: list[str]) -> tuple[float, float]:
     return elapsed, peak
 
 
+def _compile_bytecode() -> None:
+    """Write envconv's .pyc files, as installing the package does (an editable install under
+    PYTHONDONTWRITEBYTECODE would otherwise compile every module at every start)."""
+    import compileall
+
+    compileall.compile_dir(os.path.join(ROOT, "envconv"), quiet=1)
+
+
 def bench_e2e(runs: int = 6) -> None:
     exe = os.path.join(os.path.dirname(sys.executable), "envconv")
+    _compile_bytecode()
     with tempfile.TemporaryDirectory() as tmp:
         src_path = os.path.join(tmp, "latlong-2048.exr")
         envconv.write(_latlong(1024), src_path, bit_depth="float")
@@ -94,6 +106,7 @@ def bench_e2e(runs: int = 6) -> None:
         cases = [
             ("latlong 4096x2048 float EXR -> cube-vcross 1024", [exe, "convert", big_path, os.path.join(tmp, "big.exr"), "--to", "cube-vcross", "--size", "1024"]),
             ("latlong 2048x1024 float EXR -> cube-vcross 512", [exe, "convert", src_path, out_path, "--to", "cube-vcross", "--size", "512"]),
+            ("latlong 2048x1024 float EXR -> cube-vcross 512, --compression none", [exe, "convert", src_path, os.path.join(tmp, "raw.exr"), "--to", "cube-vcross", "--size", "512", "--compression", "none"]),
             ("cube-vcross 512 -> latlong 2048x1024", [exe, "convert", out_path, os.path.join(tmp, "back.exr"), "--to", "latlong", "--size", "1024"]),
         ]  # fmt: skip
         for label, cmd in cases:
@@ -104,6 +117,47 @@ def bench_e2e(runs: int = 6) -> None:
         start = time.perf_counter()
         subprocess.run([sys.executable, "-c", "import envconv.cli"], check=True)
         print(f"import envconv.cli: {time.perf_counter() - start:.3f} s (process start included)")
+
+
+# --- batch (issue 5) ------------------------------------------------------------------------
+
+
+def bench_batch(files: int = 20) -> None:
+    """``envconv batch`` over ``files`` float lat-longs 2048x1024 (zip EXR: the four examples,
+    upsampled, each under several rotations) -> cube-vcross 512, with -j 1 and -j 2, writing
+    zip (the default) and uncompressed EXRs. Prints the batch's own per-file figure (start-up
+    included once, as a batch pays it) and the whole process's wall time per file."""
+    exe = os.path.join(os.path.dirname(sys.executable), "envconv")
+    _compile_bytecode()
+    examples = sorted(p for p in os.listdir(os.path.join(ROOT, "examples", "data")) if p.endswith(".exr"))
+    with tempfile.TemporaryDirectory() as tmp:
+        inputs = os.path.join(tmp, "in")
+        os.makedirs(inputs)
+        for k in range(files):
+            name = examples[k % len(examples)]
+            source = envconv.read(os.path.join(ROOT, "examples", "data", name))
+            yaw = 360.0 * (k // len(examples)) / max(1, files // len(examples))
+            big = envconv.convert(source, "latlong", size=1024, samples=1, rotate=(yaw, 0, 0))
+            envconv.write(big, os.path.join(inputs, f"{k:02d}_{name}"), bit_depth="float")
+        for jobs in (1, 2):
+            for label, write in (("zip", ["--out", "o/{stem}_{layout}.exr"]), ("none", [])):
+                out = os.path.join(tmp, f"o{jobs}{label}")
+                steps = ["resample", "--to", "cube-vcross", "--size", "512"]
+                if not write:
+                    steps += ["write", os.path.join(out, "{stem}_{layout}.exr"), "--compression", "none"]
+                else:
+                    write = ["--out", os.path.join(out, "{stem}_{layout}.exr")]
+                cmd = [exe, "batch", inputs, *write, "-j", str(jobs), *steps]
+                for _ in range(2):  # the second run is reported; the first warms the caches
+                    shutil.rmtree(out, ignore_errors=True)
+                    start = time.perf_counter()
+                    proc = subprocess.run(cmd, capture_output=True, text=True)
+                    wall = time.perf_counter() - start
+                if proc.returncode:
+                    raise SystemExit(f"failed: {' '.join(cmd)}\n{proc.stderr}")
+                output = (proc.stdout + proc.stderr).splitlines()
+                summary = next(line for line in output if " files: " in line)
+                print(f"batch {files} x latlong 2048x1024 -> cube-vcross 512, -j {jobs}, {label}: {summary} | process {wall / files:.3f} s per file")
 
 
 # --- mip chains (issue 3) -------------------------------------------------------------------
@@ -133,12 +187,14 @@ def bench_mips(repeats: int = 7) -> None:
 
 
 def main(argv: list[str]) -> None:
-    which = argv[1:] or ["kernel", "e2e", "mips"]
+    which = argv[1:] or ["kernel", "e2e", "batch", "mips"]
     print(f"envconv {envconv.__version__}, numpy {np.__version__}, {os.cpu_count()} cores")
     if "kernel" in which:
         bench_kernel()
     if "e2e" in which:
         bench_e2e()
+    if "batch" in which:
+        bench_batch()
     if "mips" in which:
         bench_mips()
 
