@@ -60,12 +60,13 @@ def bench_kernel(samples=(1, 2, 4, 0), repeats: int = 3) -> None:
     out = np.empty((height, width, 3), np.float32)
     alpha = np.empty((height, width), np.float32)
     face_pixels = 6 * n * n
+    no_weights = np.empty((1, 1))
     for s in samples:
         times = []
         for _ in range(repeats + 1):  # the first run is a warm-up
             t = time.perf_counter()
             rips = source_rips(src, src.pixels, s or None, "bilinear")
-            resample_rows(src.pixels, *rips, *sgeo, dgeo, cf, ct, 1.0, 1.0, s, 1, rot, False, out, alpha)
+            resample_rows(src.pixels, *rips, *sgeo, dgeo, cf, ct, 1.0, 1.0, s, 1, rot, False, out, alpha, no_weights)
             times.append(time.perf_counter() - t)
         times = times[1:]
         best = min(times)

@@ -99,7 +99,6 @@ def mip_sizes(
 
 def _run_direct(source, sgeo, rot, dgeo_all, fill, shape, scale, samples, filt):
     """Resample one level directly: (pixels (H, W, C), coverage (H, W), weights (H, W))."""
-    from .kernels.mips import pixel_weights
     from .kernels.resample import resample_rows
 
     dgeo, d_cell_face, d_cell_turns, _ = dgeo_all
@@ -112,10 +111,7 @@ def _run_direct(source, sgeo, rot, dgeo_all, fill, shape, scale, samples, filt):
     resample_rows(
         source, no_rips, 0, *sgeo, dgeo, d_cell_face, d_cell_turns,
         float(scale[0]), float(scale[1]), int(samples), filt, rot, bool(fill), out, coverage,
-    )  # fmt: skip
-    pixel_weights(
-        dgeo, d_cell_face, d_cell_turns, float(scale[0]), float(scale[1]), int(samples),
-        bool(fill), weights,
+        weights,
     )  # fmt: skip
     return out, coverage, weights
 
@@ -131,23 +127,20 @@ def build_chain(
     rot: np.ndarray,
     level0: np.ndarray,
     coverage0: np.ndarray,
+    weights0: np.ndarray,
     count: int,
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Levels 0 … count-1 as (pixels (H_k, W_k, C) float32, coverage (H_k, W_k) float32).
 
-    ``level0`` and ``coverage0`` are the resampler's output for level 0, made with ``samples``
-    sub-samples per edge, ``filt`` and the output→source rotation ``rot``; see the module
-    docstring for how the other levels are made.
+    ``level0``, ``coverage0`` and ``weights0`` (each pixel's sum of sub-sample weights) are the
+    resampler's output for level 0, made with ``samples`` sub-samples per edge, ``filt`` and
+    the output→source rotation ``rot``; see the module docstring for how the other levels are
+    made.
     """
-    from .kernels.mips import pixel_weights, reduce_blocks
+    from .kernels.mips import reduce_blocks
 
     to = get_layout(to)
     sizes = mip_sizes(to, size, guard, count)
-    dgeo_all = kernel_geometry(to, size, guard)
-    dgeo, d_cell_face, d_cell_turns, _ = dgeo_all
-    w0, h0 = sizes[0]
-    weights0 = np.empty((h0, w0), np.float64)
-    pixel_weights(dgeo, d_cell_face, d_cell_turns, 1.0, 1.0, int(samples), bool(fill), weights0)
     levels = [(level0, coverage0, weights0)]
     for k in range(1, len(sizes)):
         wk, hk = sizes[k]

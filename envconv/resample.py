@@ -194,9 +194,11 @@ def convert(
     )
     src = np.ascontiguousarray(src)
     rip, rip_levels = source_rips(envmap, src, n_samples, filter)
+    # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
+    weights = np.empty((height, width) if mips else (1, 1), np.float64)
     resample_rows(
         src, rip, rip_levels, *sgeo, dgeo, d_cell_face, d_cell_turns,
-        1.0, 1.0, n_samples or 0, FILTERS[filter], rot, fill, out, coverage,
+        1.0, 1.0, n_samples or 0, FILTERS[filter], rot, fill, out, coverage, weights,
     )  # fmt: skip
     if (
         to.name == envmap.layout.name
@@ -215,7 +217,7 @@ def convert(
         count = level_count(to, size, guard_px, mips)
         chain = build_chain(
             envmap, to, size, guard_px, fill, n_samples, FILTERS[filter], rot, out, coverage,
-            count,
+            weights, count,
         )  # fmt: skip
     if alpha:
         if alpha_index is None:

@@ -129,7 +129,7 @@ def _convert_without_rips(source, n, samples):
     no_rips = np.zeros((1, 1, 3), np.float32)
     resample_rows(
         source.pixels, no_rips, 0, *sgeo, dgeo, cf, ct, 1.0, 1.0, samples, 1, np.eye(3),
-        False, out, alpha,
+        False, out, alpha, np.empty((1, 1)),
     )  # fmt: skip
     return out
 

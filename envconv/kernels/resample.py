@@ -342,9 +342,13 @@ def _level_span(span, x_part, level):
 def resample_rows(
     src, rip, rip_levels, sgeo, s_cell_face, s_cell_turns, s_face_cell,
     dgeo, d_cell_face, d_cell_turns,
-    scale_x, scale_y, samples, filt, rot, fill, out, alpha,
+    scale_x, scale_y, samples, filt, rot, fill, out, alpha, weights,
 ):  # fmt: skip
     """Fill ``out`` (H, W, C float32) and ``alpha`` (H, W float32); see the module docstring.
+
+    ``weights`` (H, W float64) receives each pixel's sum of sub-sample weights (the solid-angle
+    density of its readable sub-samples), from which the mip chain averages blocks of pixels
+    with exactly the weights used here; pass a (1, 1) array to skip it.
 
     ``rip`` holds ``rip_levels`` levels of a lat-long source's rip-map
     (:func:`envconv.kernels.ripmap.build_rips`); pass ``rip_levels = 0`` (and any array of
@@ -381,6 +385,7 @@ def resample_rows(
     # mapping a 2 × 2 block's grid costs more than its 4 samples), and only blocks that fail at
     # that size map every sub-sample exactly: near a pole or along a seam that is a thin strip.
     min_subtile = 4 if samples == 1 else MIN_SUBTILE
+    keep_weights = weights.shape[0] == height and weights.shape[1] == width
     for band in prange(n_bands):
         acc = np.zeros(nch, np.float64)
         tmp = np.zeros(3 * nch, np.float64)
@@ -412,6 +417,8 @@ def resample_rows(
                         for i in range(i0, i1):
                             out[j, i, :] = 0.0
                             alpha[j, i] = 0.0
+                            if keep_weights:
+                                weights[j, i] = 0.0
                     continue
                 face = -1
                 cell = -1
@@ -472,6 +479,8 @@ def resample_rows(
                             rip, level,
                         )  # fmt: skip
                             _store(out, alpha, j, i, acc, wsum, nvalid / (nx * ny))
+                            if keep_weights:
+                                weights[j, i] = wsum
                     continue
                 bx0 = (c00 % s_cols) * s_cw
                 by0 = (c00 // s_cols) * s_ch
@@ -613,6 +622,8 @@ def resample_rows(
                             acc[1] += acc_g
                             acc[2] += acc_b
                         _store(out, alpha, j, i, acc, wsum, 1.0)
+                        if keep_weights:
+                            weights[j, i] = wsum
 
 
 @jit_inline
