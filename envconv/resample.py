@@ -24,7 +24,7 @@ samples="auto"
     With the bilinear filter a lat-long source is read through a horizontal rip-map where a
     pixel spans at least 8 × 2^k texels along x (its polar rows), and sub-samples are counted
     in that level's texels (see :mod:`envconv.kernels.ripmap` and ``RIP_MIN_SPAN`` in
-    :mod:`envconv.kernels.resample`).
+    :mod:`envconv.kernels.footprint`).
     A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
     With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
     of output to source pixel pitch on the horizon, so that every level is the exact block

@@ -1,7 +1,7 @@
 """Kernels that map between image points and directions, one point at a time.
 
 Used by :mod:`envconv.geometry` (uv ↔ direction, pixel solid angles) and by the resampling and
-mip kernels (:func:`output_sample`). Geometry arrives as (geo, cell_face, cell_turns, face_cell);
+mip kernels (:func:`output_sample`, :func:`source_point`). Geometry arrives as (geo, cell_face, cell_turns, face_cell);
 see :mod:`envconv.kernels.cells`. Image points are level-0 pixels.
 """
 
@@ -21,6 +21,7 @@ from .geometry import density, dir_to_face, face_to_dir
 
 __all__ = [
     "output_sample",
+    "source_point",
     "map_points_to_dirs",
     "map_dirs_to_points",
     "pixel_solid_angles",
@@ -40,6 +41,17 @@ def output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill):
     cell = nearest_cell(dgeo, d_cell_face, px, py)
     a, b = cell_local(dgeo, d_cell_turns, cell, px, py)
     return d_cell_face[cell], a, b, True, False
+
+
+@jit_inline
+def source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot):
+    """Source image point and cell of output point (a, b) of ``face``, after rotation."""
+    x, y, z = face_to_dir(dfam, face, a, b)
+    xs = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z
+    ys = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z
+    zs = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z
+    sface, sa, sb = dir_to_face(sgeo[GEO_FAMILY], xs, ys, zs)
+    return face_to_image(sgeo, s_face_cell, s_cell_turns, sface, sa, sb)
 
 
 @jit_parallel

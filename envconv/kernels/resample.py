@@ -1,4 +1,4 @@
-"""The fused resampling kernel and its per-pixel helpers.
+"""The fused resampling kernel.
 
 For every output pixel the kernel takes S×S stratified sub-samples at ((i + (sx + 0.5)/S),
 (j + (sy + 0.5)/S)) output pixels, scales them to level-0 image points, maps each to a direction
@@ -9,6 +9,8 @@ environment over the part of it that holds directions. Alpha is the fraction of 
 the valid region.
 
 Geometry arrives as (geo, cell_face, cell_turns, face_cell); see :mod:`envconv.kernels.cells`.
+Tiles are in :mod:`envconv.kernels.tiles`, the auto sub-sample rule in
+:mod:`envconv.kernels.footprint`, the rip-map in :mod:`envconv.kernels.ripmap`.
 """
 
 import math
@@ -17,30 +19,30 @@ import numpy as np
 from numba import prange
 
 from .._jit import jit_inline, jit_parallel
-from .cells import (
-    GEO_FAMILY,
-    cell_local,
-    face_to_image,
-    locate,
-    point_valid,
+from .cells import GEO_FAMILY, cell_local
+from .footprint import (
+    AUTO_EDGE_SAMPLES,
+    auto_count,
+    level_span,
+    pixel_footprint,
+    rip_level,
 )
-from .geometry import density, dir_to_face, face_to_dir, is_disk
+from .geometry import density, is_disk
 from .mapping import output_sample as _output_sample
+from .mapping import source_point
 from .ripmap import level_tap, rip_offset
 from .taps import accumulate_sample
+from .tiles import (
+    MIN_SUBTILE,
+    MIN_TILES_PER_CELL,
+    TILE,
+    lagrange3,
+    map_tile,
+    tile_face,
+    tile_in_empty_cell,
+)
 
 __all__ = ["resample_rows"]
-
-
-@jit_inline
-def _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot):
-    """Source image point and cell of output point (a, b) of ``face``, after rotation."""
-    x, y, z = face_to_dir(dfam, face, a, b)
-    xs = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z
-    ys = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z
-    zs = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z
-    sface, sa, sb = dir_to_face(sgeo[GEO_FAMILY], xs, ys, zs)
-    return face_to_image(sgeo, s_face_cell, s_cell_turns, sface, sa, sb)
 
 
 @jit_inline
@@ -72,7 +74,7 @@ def _exact_pixel(
             if valid:
                 nvalid += 1
             w = density(dfam, face, a, b)
-            spx, spy, scell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+            spx, spy, scell = source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
             if level > 0:
                 level_tap(rip, start, level_width, spx * x_scale, spy, w, acc)
             else:
@@ -84,258 +86,8 @@ def _exact_pixel(
     return wsum, nvalid
 
 
-@jit_inline
-def _auto_count(footprint):
-    """Sub-samples along an edge that spans ``footprint`` source pixels (see AUTO_SPACING)."""
-    n = int(math.ceil(footprint / AUTO_SPACING - AUTO_SLACK))
-    return min(max(n, 1), AUTO_MAX_SAMPLES)
-
-
-@jit_inline
-def _one_sided_span(
-    sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam, rot, fill,
-    face, px, py, step_x, step_y, sx0, sy0, cell0,
-):  # fmt: skip
-    """Source pixels per output pixel along (step_x, step_y), by a forward or backward
-    difference of a hundredth of a pixel, whichever stays in one output face and one source
-    cell and moves less (the other may jump across a seam); -1 when neither does.
-
-    Returns (span, |x component of the span|).
-    """
-    delta = 0.01
-    best = -1.0
-    best_x = -1.0
-    for side in (1.0, -1.0):
-        qx = px + side * delta * step_x
-        qy = py + side * delta * step_y
-        qface, qa, qb, readable, valid = _output_sample(
-            dgeo, d_cell_face, d_cell_turns, qx, qy, fill
-        )
-        if not readable or qface != face:
-            continue
-        sx, sy, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, qa, qb, rot)
-        if cell != cell0:
-            continue
-        span = math.hypot(sx - sx0, sy - sy0) / delta
-        if best < 0.0 or span < best:
-            best = span
-            best_x = abs(sx - sx0) / delta
-    return best, best_x
-
-
-@jit_inline
-def _pixel_footprint(
-    sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam,
-    i, j, scale_x, scale_y, rot, fill,
-):  # fmt: skip
-    """Source pixels spanned by the x and y edges of output pixel (i, j), at its centre.
-
-    From the Jacobian of the map output point → source point, by differences over a hundredth
-    of a pixel: anisotropic, so a mirror ball's rim (radially squeezed) or a lat-long's polar
-    rows (stretched in x) get their sub-samples along the axis that needs them. Each difference
-    is taken on the side that does not cross a seam (a lat-long's wrap, a face edge, an output
-    cell edge); where both sides do, the isotropic √(Ω_out / Ω_in) of the pixel solid angles is
-    used instead. Returns (span_x, span_y, x_of_span_x, x_of_span_y): the last two are the
-    source-x components of the two edges (for choosing a rip-map level), -1 where only the
-    isotropic estimate exists; all -1 when the centre holds no direction (outside a disk).
-    """
-    px = (i + 0.5) * scale_x
-    py = (j + 0.5) * scale_y
-    face, a, b, readable, valid = _output_sample(dgeo, d_cell_face, d_cell_turns, px, py, fill)
-    if not readable:
-        return -1.0, -1.0, -1.0, -1.0
-    sx0, sy0, cell0 = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
-    span_x, x_of_x = _one_sided_span(
-        sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam, rot, fill,
-        face, px, py, scale_x, 0.0, sx0, sy0, cell0,
-    )  # fmt: skip
-    span_y, x_of_y = _one_sided_span(
-        sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam, rot, fill,
-        face, px, py, 0.0, scale_y, sx0, sy0, cell0,
-    )  # fmt: skip
-    if span_x >= 0.0 and span_y >= 0.0:
-        return span_x, span_y, x_of_x, x_of_y
-    # A seam between the points: the ratio of the two pixels' solid angles (density × area).
-    d_area = (2.0 * scale_x / (dgeo[3] * dgeo[1])) * (2.0 * scale_y / dgeo[1])
-    s_area = (2.0 / (sgeo[3] * sgeo[1])) * (2.0 / sgeo[1])
-    x, y, z = face_to_dir(dfam, face, a, b)
-    xs = rot[0, 0] * x + rot[0, 1] * y + rot[0, 2] * z
-    ys = rot[1, 0] * x + rot[1, 1] * y + rot[1, 2] * z
-    zs = rot[2, 0] * x + rot[2, 1] * y + rot[2, 2] * z
-    sfam = sgeo[GEO_FAMILY]
-    sface, sa, sb = dir_to_face(sfam, xs, ys, zs)
-    omega_in = density(sfam, sface, sa, sb) * s_area
-    omega_out = density(dfam, face, a, b) * d_area
-    if omega_in <= omega_out * 1e-6:  # a degenerate point of the source (angular's rim)
-        return 1e3, 1e3, -1.0, -1.0
-    ratio = math.sqrt(omega_out / omega_in)
-    return ratio, ratio, -1.0, -1.0
-
-
-@jit_inline
-def _tile_in_empty_cell(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
-    """True when the level-0 box [x0, x1) × [y0, y1) lies in one cell that holds no face."""
-    face, a, b, cell = locate(dgeo, d_cell_face, d_cell_turns, x0, y0)
-    if face >= 0:
-        return False
-    face2, a2, b2, cell2 = locate(
-        dgeo, d_cell_face, d_cell_turns, np.nextafter(x1, x0), np.nextafter(y1, y0)
-    )
-    return cell2 == cell
-
-
-@jit_inline
-def _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
-    """(face, cell) when the level-0 box [x0, x1] × [y0, y1] lies in one cell's valid region.
-
-    The valid region is convex (a rectangle or a disk), so checking the four corners suffices.
-    Returns face -1 otherwise.
-    """
-    face, a, b, cell = locate(dgeo, d_cell_face, d_cell_turns, x0, y0)
-    if face < 0 or not point_valid(dgeo, face, a, b):
-        return -1, cell
-    xe = np.nextafter(x1, x0)
-    ye = np.nextafter(y1, y0)
-    for k in range(3):
-        px = xe if k != 1 else x0
-        py = ye if k != 0 else y0
-        face2, a2, b2, cell2 = locate(dgeo, d_cell_face, d_cell_turns, px, py)
-        if cell2 != cell or not point_valid(dgeo, face, a2, b2):
-            return -1, cell
-    return face, cell
-
-
-# Tiles of TILE × TILE output pixels (TILE / 2 when a cell is too small for TILE; see
-# MIN_TILES_PER_CELL) map a 3 × 3 grid of points exactly (corners, edge midpoints,
-# centre); the source position of every sub-sample inside is interpolated biquadratically from
-# them. The map is then checked exactly at the four quarter points (1/4 or 3/4 along each axis),
-# where the cubic error of that interpolation is near its largest. If a check is more than
-# INTERP_TOLERANCE source pixels off (a seam, a pole, a wrap, strong curvature), or a grid point
-# lands in another source cell, the tile is split into four quarters that try again, down to
-# MIN_SUBTILE pixels; a block that still fails maps every sub-sample exactly. Tiles are only
-# tried when they span at most 1/MIN_TILES_PER_CELL of a cell, so that higher-order terms, which
-# the checks could miss, are negligible. At INTERP_TOLERANCE = 0.01 texel, a sub-sample's read
-# is off by at most 1% of the difference between neighbouring texels. Weights (the output
-# layout's solid-angle density) are interpolated the same way and checked to WEIGHT_TOLERANCE,
-# relative: an error that small and that smooth changes a pixel's mean by about 1e-4 of its
-# contrast, and no pixel's solid angle (its share of the energy) depends on it.
-TILE = 16
-MIN_SUBTILE = 2
-INTERP_TOLERANCE = 0.01
-WEIGHT_TOLERANCE = 1e-3
-MIN_TILES_PER_CELL = 8
-
-
-@jit_inline
-def _lagrange3(g0, g1, g2, f):
-    """Quadratic through (0, g0), (0.5, g1), (1, g2), at f."""
-    return (
-        g0 * (2.0 * f * f - 3.0 * f + 1.0) + g1 * (4.0 * f - 4.0 * f * f) + g2 * (2.0 * f * f - f)
-    )
-
-
-@jit_inline
-def _map_tile(
-    sgeo, s_face_cell, s_cell_turns, dfam, face, rot, a00, b00, da_x, db_x, da_y, db_y, grid,
-):  # fmt: skip
-    """Map the tile's 3 × 3 grid into ``grid`` (3, 3, 3): source x, source y and the output
-    layout's solid-angle density, and check the quarter points.
-
-    Returns the source cell when biquadratic interpolation of the grid is within
-    INTERP_TOLERANCE texels of the exact map, and within WEIGHT_TOLERANCE (relative) of the
-    exact density, and the whole grid lies in that cell, else -1.
-    """
-    cell0 = -1
-    for r in range(3):
-        for c in range(3):
-            a = a00 + da_x * (0.5 * c) + da_y * (0.5 * r)
-            b = b00 + db_x * (0.5 * c) + db_y * (0.5 * r)
-            px, py, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
-            if r == 0 and c == 0:
-                cell0 = cell
-            elif cell != cell0:
-                return -1
-            grid[r, c, 0] = px
-            grid[r, c, 1] = py
-            grid[r, c, 2] = density(dfam, face, a, b)
-    for q in range(4):
-        fx = 0.25 + 0.5 * (q % 2)
-        fy = 0.25 + 0.5 * (q // 2)
-        a = a00 + da_x * fx + da_y * fy
-        b = b00 + db_x * fx + db_y * fy
-        px, py, cell = _source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
-        if cell != cell0:
-            return -1
-        for k in range(3):
-            if k == 0:
-                value = px
-                tolerance = INTERP_TOLERANCE
-            elif k == 1:
-                value = py
-                tolerance = INTERP_TOLERANCE
-            else:
-                value = density(dfam, face, a, b)
-                tolerance = WEIGHT_TOLERANCE * value
-            interpolated = _lagrange3(
-                _lagrange3(grid[0, 0, k], grid[0, 1, k], grid[0, 2, k], fx),
-                _lagrange3(grid[1, 0, k], grid[1, 1, k], grid[1, 2, k], fx),
-                _lagrange3(grid[2, 0, k], grid[2, 1, k], grid[2, 2, k], fx),
-                fy,
-            )
-            if not abs(interpolated - value) <= tolerance:
-                return -1
-    return cell0
-
-
-# samples <= 0 asks for adaptive sub-sampling: each pixel (or tile) takes nx × ny sub-samples
-# with nx = ceil(footprint_x / AUTO_SPACING - AUTO_SLACK), where footprint_x is the number of
-# source pixels its edge spans there. In a reduction (footprint ≥ 2) sub-samples are then about
-# half a texel apart, so every texel under the pixel is read and nothing aliases. Up to a
-# footprint of 2 a pixel takes one sample, as sharp as a single-tap converter: one bilinear tap
-# reads 2 × 2 texels, so taps 2 texels apart still read every texel, and averaging several taps
-# there only blurs (about 1 dB on a same-size round trip, where cube corners reach 1.9).
-# Tiles measure the footprint along each axis from their grid, exactly mapped pixels from the
-# Jacobian at their centre (both anisotropic: a lat-long's polar rows, a mirror ball's rim). A
-# pixel that is not wholly inside one cell's valid region (a disk's rim, a cell edge) takes at
-# least AUTO_EDGE_SAMPLES per edge, so that its coverage (alpha) is exact to 1/AUTO_EDGE_SAMPLES².
-AUTO_SPACING = 0.5
-AUTO_SLACK = 3.0
-AUTO_MAX_SAMPLES = 32
-AUTO_EDGE_SAMPLES = 8
 # The most sub-samples per pixel edge a tile may take (samples=64 is the API's limit).
 MAX_ROW_SAMPLES = 64
-
-# With a rip-map (a lat-long source, adaptive sampling, bilinear filter; see
-# envconv.kernels.ripmap), a pixel whose footprint spans X level-0 texels along the source's x
-# (the x components of its two edges, added) reads level k, the largest with
-# 2^k · RIP_MIN_SPAN ≤ X, and counts its sub-samples by the footprint in level-k texels. The
-# box of 2^k texels that level averages is then at most 1/RIP_MIN_SPAN of the footprint's width,
-# and sub-samples stay about half a level-k texel apart, so nothing aliases. A polar-cap pixel
-# spanning 50 texels in x reads level 2 with 22 sub-samples along x rather than 32; over the top
-# face of a 512 cube from a 2048 × 1024 lat-long the mean count falls from 6.4 to 3.7. The box and the
-# bilinear tent of level k widen the pixel's footprint by about 2^k texels on each side; at
-# RIP_MIN_SPAN = 4 that cost 4 × the brute-force error on stripes that converge on a pole
-# (tests/test_ripmap.py), at 8 it costs 13%.
-RIP_MIN_SPAN = 8.0
-
-
-@jit_inline
-def _rip_level(x_extent, levels):
-    """Rip-map level for a footprint ``x_extent`` level-0 texels wide (see RIP_MIN_SPAN)."""
-    level = 0
-    while level < levels and RIP_MIN_SPAN * (2 << level) <= x_extent:
-        level += 1
-    return level
-
-
-@jit_inline
-def _level_span(span, x_part, level):
-    """Length in level-``level`` texels of an edge ``span`` level-0 texels long whose x
-    component is ``x_part`` (levels shrink x by 2^level and keep y)."""
-    if level == 0:
-        return span
-    shrink = 1.0 / (1 << level)
-    return math.sqrt(max(span * span - x_part * x_part * (1.0 - shrink * shrink), 0.0))
 
 
 @jit_parallel
@@ -410,9 +162,7 @@ def resample_rows(
                 y0 = j0 * scale_y
                 x1 = i1 * scale_x
                 y1 = j1 * scale_y
-                if not fill and _tile_in_empty_cell(
-                    dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1
-                ):
+                if not fill and tile_in_empty_cell(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1):
                     for j in range(j0, j1):
                         for i in range(i0, i1):
                             out[j, i, :] = 0.0
@@ -423,7 +173,7 @@ def resample_rows(
                 face = -1
                 cell = -1
                 if may_tile and size <= largest_tile:
-                    face, cell = _tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1)
+                    face, cell = tile_face(dgeo, d_cell_face, d_cell_turns, x0, y0, x1, y1)
                 c00 = -1
                 if face >= 0:
                     a00, b00 = cell_local(dgeo, d_cell_turns, cell, x0, y0)
@@ -433,7 +183,7 @@ def resample_rows(
                     db_x = b10 - b00
                     da_y = a01 - a00
                     db_y = b01 - b00
-                    c00 = _map_tile(
+                    c00 = map_tile(
                     sgeo, s_face_cell, s_cell_turns, dfam, face, rot,
                     a00, b00, da_x, db_x, da_y, db_y, grid,
                 )  # fmt: skip
@@ -455,17 +205,17 @@ def resample_rows(
                             ny = samples
                             level = 0
                             if adaptive:
-                                span_x, span_y, x_of_x, x_of_y = _pixel_footprint(
+                                span_x, span_y, x_of_x, x_of_y = pixel_footprint(
                                 sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face,
                                 d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill,
                             )  # fmt: skip
                                 if rip_levels > 0 and x_of_x >= 0.0:
-                                    level = _rip_level(x_of_x + x_of_y, rip_levels)
-                                nx = _auto_count(_level_span(span_x, x_of_x, level))
-                                ny = _auto_count(_level_span(span_y, x_of_y, level))
+                                    level = rip_level(x_of_x + x_of_y, rip_levels)
+                                nx = auto_count(level_span(span_x, x_of_x, level))
+                                ny = auto_count(level_span(span_y, x_of_y, level))
                                 # A pixel not wholly in one cell's valid region (a rim, a cell
                                 # edge) needs enough sub-samples for its coverage (alpha).
-                                whole, _ = _tile_face(
+                                whole, _ = tile_face(
                                 dgeo, d_cell_face, d_cell_turns,
                                 i * scale_x, j * scale_y, (i + 1) * scale_x, (j + 1) * scale_y,
                             )  # fmt: skip
@@ -500,7 +250,7 @@ def resample_rows(
                                 abs(grid[k, 2, 0] - grid[k, 0, 0]) * inv_tw
                                 + abs(grid[2, k, 0] - grid[0, k, 0]) * inv_th,
                             )
-                        level = _rip_level(x_extent, rip_levels)
+                        level = rip_level(x_extent, rip_levels)
                     shrink = 1.0 / (1 << level)
                     edge_x = 0.0
                     edge_y = 0.0
@@ -519,8 +269,8 @@ def resample_rows(
                                 grid[2, k, 1] - grid[0, k, 1],
                             ),
                         )
-                    nx = _auto_count(edge_x * inv_tw)
-                    ny = _auto_count(edge_y * inv_th)
+                    nx = auto_count(edge_x * inv_tw)
+                    ny = auto_count(edge_y * inv_th)
                 # Taps read level 0 (src) or a rip-map level, at x_scale · x + x_offset.
                 image = src
                 x_scale = 1.0
@@ -544,9 +294,9 @@ def resample_rows(
                 for r in range((j1 - j0) * ny):
                     fy = (r // ny + (r % ny + 0.5) * inv_ny) * inv_th
                     for k in range(3):
-                        q0 = _lagrange3(grid[0, 0, k], grid[1, 0, k], grid[2, 0, k], fy)
-                        q1 = _lagrange3(grid[0, 1, k], grid[1, 1, k], grid[2, 1, k], fy)
-                        q2 = _lagrange3(grid[0, 2, k], grid[1, 2, k], grid[2, 2, k], fy)
+                        q0 = lagrange3(grid[0, 0, k], grid[1, 0, k], grid[2, 0, k], fy)
+                        q1 = lagrange3(grid[0, 1, k], grid[1, 1, k], grid[2, 1, k], fy)
+                        q2 = lagrange3(grid[0, 2, k], grid[1, 2, k], grid[2, 2, k], fy)
                         rows[r, 3 * k] = q0
                         rows[r, 3 * k + 1] = -3.0 * q0 + 4.0 * q1 - q2
                         rows[r, 3 * k + 2] = 2.0 * q0 - 4.0 * q1 + 2.0 * q2
