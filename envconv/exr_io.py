@@ -3,14 +3,18 @@
 OIIO (:mod:`envconv.io`) opens every file and reads its header. A single-part scanline EXR of
 half or float channels whose data window is its display window is then decoded by OpenEXR: its
 zip decoder (libdeflate) takes half the time of the one OIIO's wheel links. Such a file is also
-written by OpenEXR when each attribute has a known OIIO spelling and OpenEXR's single thread is
-the cheaper choice. Either way the pixels and attributes are those OIIO would give
+written by OpenEXR when each attribute has a known OIIO spelling. OpenEXR's thread pool gets
+the thread count OIIO's ``exr_threads`` names (all cores by default, one in a batch worker), so
+both libraries use the cores alike; on two cores OpenEXR decodes a 2048×1024 zip float in
+0.03 s against OIIO's 0.12 s, and writes a 512 cross with zip in 0.14 s against 0.19–0.25 s.
+Either way the pixels and attributes are those OIIO would give
 (``tests/test_io.py`` checks both directions); anything else goes through OIIO.
 """
 
 from __future__ import annotations
 
 import logging
+import os
 import time
 from typing import Any
 
@@ -26,6 +30,26 @@ def _oiio_threads(name: str, default: int) -> int:
     import OpenImageIO
 
     return OpenImageIO.get_int_attribute(name, default)
+
+
+def _set_openexr_threads(compression: str = "zip") -> None:
+    """Size OpenEXR's global thread pool from OIIO's ``exr_threads`` (0: all cores).
+
+    Uncompressed and RLE data gain nothing from helper threads (0.047 s alone against 0.06 s on
+    two for a 512 cross), so those run on the calling thread. The pool is resized only when the
+    count changes (about 3 ms to shrink, 0.1 ms to grow)."""
+    import OpenEXR
+
+    setter = getattr(OpenEXR, "set_global_thread_count", None)
+    if setter is None:  # OpenEXR < 3.3: single-threaded
+        return
+    threads = _oiio_threads("exr_threads", 0)
+    if threads <= 0:
+        threads = os.cpu_count() or 1
+    if threads == 1 or compression in ("none", "rle"):
+        threads = 0  # OpenEXR's "no pool": the calling thread does the work
+    if OpenEXR.global_thread_count() != threads:
+        setter(threads)
 
 
 def is_plain_exr(inp, spec) -> bool:
@@ -51,6 +75,7 @@ def read_exr_pixels(path: str, spec):
 
     names = list(spec.channelnames)
     grouped = names in (["R", "G", "B"], ["R", "G", "B", "A"])
+    _set_openexr_threads(spec.get_string_attribute("compression", "zip"))
     try:
         with OpenEXR.File(path, separate_channels=not grouped) as exr:
             channels = exr.channels()
@@ -68,7 +93,8 @@ def read_exr_pixels(path: str, spec):
 
 
 # Plain scanline EXRs can be written by the OpenEXR library: on one core, 3 × faster than OIIO's
-# writer uncompressed and 1.25 × with zip. Only attributes whose OIIO translation is known take this path;
+# writer uncompressed and 1.25 × with zip; with its thread pool, also faster on all cores. Only
+# attributes whose OIIO translation is known take this path;
 # a file with any other attribute, tiles, MIP levels or a compression level goes through OIIO.
 # tests/test_io.py checks that both writers give the same pixels and the same attributes.
 _EXR_COMPRESSIONS = {
@@ -81,11 +107,11 @@ _EXR_INTEROP_IDS = ("lin_rec709_scene", "lin_ap1_scene", "lin_ap0_scene")
 
 
 def prefer_openexr_writer(spec) -> bool:
-    """The OpenEXR wheel's writer runs on one thread, OIIO's compresses on all of them: use the
-    former where compression is cheap (none, rle) or where OIIO has one thread too (batch
-    workers), so that the total work is least in a batch and the wall time least alone."""
-    compression = spec.get_string_attribute("compression", "zip")
-    return compression in ("none", "rle") or _oiio_threads("exr_threads", 0) == 1
+    """Whether to try the OpenEXR writer first. With its thread pool sized like OIIO's it is
+    faster for every lossless compression measured (zip 0.14 s against 0.19–0.25 s, none 0.05 s
+    against 0.10 s, piz 0.35 s against 0.49 s for a 512 cross on two cores); an attribute or a
+    compression level it cannot spell still sends the file to OIIO (:func:`plain_exr_header`)."""
+    return spec.get_string_attribute("compression", "zip") in _EXR_COMPRESSIONS
 
 
 def plain_exr_header(spec) -> dict[str, Any] | None:
@@ -137,6 +163,7 @@ def write_plain_exr(temp: str, spec, data: np.ndarray) -> bool:
         channels = {"".join(names): np.ascontiguousarray(data, dtype)}
     else:
         channels = {n: np.ascontiguousarray(data[:, :, k], dtype) for k, n in enumerate(names)}
+    _set_openexr_threads(spec.get_string_attribute("compression", "zip"))
     try:
         with OpenEXR.File(header, channels) as exr:
             exr.write(temp)

@@ -530,8 +530,8 @@ def test_exr_attributes_oiio_must_translate_go_through_oiio(tmp_path, monkeypatc
     assert attributes["Copyright"] == ("string", "someone")
 
 
-def test_openexr_writer_is_preferred_where_it_is_faster():
-    """One thread (batch workers) or cheap compression: OpenEXR; zip on several threads: OIIO."""
+def test_openexr_writer_takes_the_compressions_it_can_spell():
+    """Lossless compressions OpenEXR spells go to its writer; a level or a lossy DWA to OIIO."""
     import OpenImageIO as oiio
 
     from envconv.io import _prefer_openexr_writer
@@ -541,12 +541,33 @@ def test_openexr_writer_is_preferred_where_it_is_faster():
         s.attribute("compression", compression)
         return s
 
-    threads = oiio.get_int_attribute("exr_threads")
+    for compression in ("none", "rle", "zip", "zips", "piz"):
+        assert _prefer_openexr_writer(spec(compression)), compression
+    for compression in ("zip:9", "dwaa", "dwab:45"):
+        assert not _prefer_openexr_writer(spec(compression)), compression
+
+
+def test_openexr_thread_pool_follows_oiio_exr_threads():
+    """OpenEXR compresses on as many threads as OIIO would (one in a batch worker), and on the
+    calling thread alone for uncompressed or RLE data."""
+    import OpenEXR
+    import OpenImageIO as oiio
+
+    from envconv.exr_io import _set_openexr_threads
+
+    threads, pool = oiio.get_int_attribute("exr_threads"), OpenEXR.global_thread_count()
     try:
-        oiio.attribute("exr_threads", 2)
-        assert _prefer_openexr_writer(spec("none")) and _prefer_openexr_writer(spec("rle"))
-        assert not _prefer_openexr_writer(spec("zip"))
+        oiio.attribute("exr_threads", 3)
+        _set_openexr_threads("zip")
+        assert OpenEXR.global_thread_count() == 3
+        _set_openexr_threads("none")
+        assert OpenEXR.global_thread_count() == 0
         oiio.attribute("exr_threads", 1)
-        assert _prefer_openexr_writer(spec("zip"))
+        _set_openexr_threads("zip")
+        assert OpenEXR.global_thread_count() == 0
+        oiio.attribute("exr_threads", 0)  # OIIO's "all cores"
+        _set_openexr_threads("piz")
+        assert OpenEXR.global_thread_count() == (os.cpu_count() or 1)
     finally:
         oiio.attribute("exr_threads", threads)
+        OpenEXR.set_global_thread_count(pool)
