@@ -15,8 +15,6 @@ from __future__ import annotations
 
 import logging
 import os
-import re
-from contextlib import contextmanager
 from dataclasses import replace
 from pathlib import Path
 from typing import Any
@@ -26,10 +24,17 @@ import numpy as np
 from .detect import detect_layout
 from .envmap import EnvMap
 from .errors import ImageIOError, LayoutError
-from .exr_io import is_plain_exr as _plain_exr
 from .exr_io import prefer_openexr_writer as _prefer_openexr_writer
-from .exr_io import read_exr_pixels as _read_exr_pixels
 from .exr_io import write_plain_exr as _write_plain_exr
+from .imagefile import (
+    FORMATS,
+    _first_line,
+    _oiio,
+    _open_input,
+    read_header,
+    read_image,
+    read_pixel_type,
+)
 from .layouts import get_layout
 
 __all__ = ["read", "write", "read_image", "read_header", "read_pixel_type", "choose_pixel_type",
@@ -37,111 +42,12 @@ __all__ = ["read", "write", "read_image", "read_header", "read_pixel_type", "cho
 
 log = logging.getLogger(__name__)
 
-#: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
-FORMATS = {
-    ".exr": ("openexr", ("half", "float"), None, None),
-    ".hdr": ("hdr", ("float",), "float", 3),
-    ".tif": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
-    ".tiff": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
-    ".png": ("png", ("uint8", "uint16"), "uint8", 4),
-    ".jpg": ("jpeg", ("uint8",), "uint8", 3),
-    ".jpeg": ("jpeg", ("uint8",), "uint8", 3),
-}
-
 # Metadata that describes a file's encoding rather than its content; never copied to an output.
 _DROP_PREFIXES = ("oiio:", "envconv:", "openexr:", "tiff:", "png:", "jpeg:", "exif:", "hdr:")
 _DROP_NAMES = {"envmap", "compression", "planarconfig", "Orientation", "XResolution",
                "YResolution", "ResolutionUnit", "PixelAspectRatio", "screenWindowCenter",
                "screenWindowWidth", "tile_width", "tile_height", "Software", "textureformat"}  # fmt: skip
 _KEEP_NAMES = {"oiio:ColorSpace"}
-
-
-def _oiio():
-    import OpenImageIO
-
-    return OpenImageIO
-
-
-def read_image(path: str | os.PathLike, level: int = 0):
-    """Read one image file as float32 (H, W, C).
-
-    Returns
-    -------
-    pixels, channel names, metadata dict, pixel type (``half``/``float``/``uint8``/``uint16``)
-    """
-    oiio = _oiio()
-    path = os.fspath(path)
-    if not os.path.exists(path):
-        raise ImageIOError(f"input file not found: {path}")
-    if os.path.isdir(path):
-        raise ImageIOError(f"input is a directory, not an image: {path}")
-    # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
-    # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.
-    config = oiio.ImageSpec()
-    config.attribute("oiio:UnassociatedAlpha", 1)
-    inp = oiio.ImageInput.open(path, config)
-    if inp is None:
-        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
-    try:
-        if level and not inp.seek_subimage(0, level):
-            raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
-        spec = inp.spec()
-        pixels = None
-        if level == 0 and _plain_exr(inp, spec):
-            pixels = _read_exr_pixels(path, spec)
-        if pixels is None:
-            pixels = inp.read_image(0, level, 0, spec.nchannels, oiio.FLOAT)
-        if pixels is None or inp.has_error:
-            raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
-        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
-        channels = tuple(spec.channelnames)
-        pixel_type = str(spec.format)
-    finally:
-        inp.close()
-    pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
-    return np.ascontiguousarray(pixels), channels, metadata, pixel_type
-
-
-@contextmanager
-def _open_input(path: str):
-    """An open OIIO ImageInput for ``path`` (closed on exit); one-line errors otherwise."""
-    oiio = _oiio()
-    if not os.path.isfile(path):
-        raise ImageIOError(f"input file not found: {path}")
-    inp = oiio.ImageInput.open(path)
-    if inp is None:
-        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
-    try:
-        yield inp
-    finally:
-        inp.close()
-
-
-def read_header(path: str | os.PathLike, level: int = 0):
-    """Read one image file's header without its pixels.
-
-    Returns
-    -------
-    width, height, channel names, metadata dict (of MIP level ``level``)
-    """
-    path = os.fspath(path)
-    with _open_input(path) as inp:
-        if level and not inp.seek_subimage(0, level):
-            raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
-        spec = inp.spec()
-        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
-        return spec.width, spec.height, tuple(spec.channelnames), metadata
-
-
-def read_pixel_type(path: str | os.PathLike) -> str:
-    """Pixel type of one image file (``half``, ``float``, ``uint8``...), from its header only."""
-    with _open_input(os.fspath(path)) as inp:
-        return str(inp.spec().format)
-
-
-def _first_line(message: str) -> str:
-    message = (message or "unknown error").strip()
-    return message.splitlines()[0] if message else "unknown error"
 
 
 def read(
@@ -482,22 +388,6 @@ def _level_spec(target, pixels, envmap: EnvMap, face, bit_depth, compression):
 # TIFF, Radiance HDR and JPEG keep only the attributes their format defines, so envconv's
 # layout tags also travel in ImageDescription, as "envconv:layout=NAME envconv:size=N ...".
 _DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
-_DESCRIPTION_TAG = re.compile(r"\s*envconv:(layout|size|guard|face|level)=(\S+)")
-
-
-def _tags_from_description(metadata: dict[str, Any]) -> dict[str, Any]:
-    """Move envconv tags found in ImageDescription into ``envconv:*`` keys (if not present)."""
-    description = metadata.get("ImageDescription")
-    if not isinstance(description, str) or "envconv:" not in description:
-        return metadata
-    for key, value in _DESCRIPTION_TAG.findall(description):
-        metadata.setdefault(f"envconv:{key}", value)
-    rest = _DESCRIPTION_TAG.sub("", description).strip()
-    if rest:
-        metadata["ImageDescription"] = rest
-    else:
-        del metadata["ImageDescription"]
-    return metadata
 
 
 def _set_envconv_tags(spec, envmap: EnvMap, fmt: str, face: str | None) -> None:

@@ -1,0 +1,211 @@
+"""One image file to and from float32 pixels and its header, through OpenImageIO and OpenEXR.
+
+This module knows files, not layouts: :mod:`envconv.io` builds environment maps on top of it.
+It imports neither numba nor the layouts, so a command can start decoding its input on a
+helper thread (:func:`read_ahead`) while the rest of envconv is still being imported: OIIO and
+OpenEXR release the GIL while they decode. Plain scanline EXRs are decoded by OpenEXR
+(:mod:`envconv.exr_io`), everything else by OIIO.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import stat
+import threading
+from contextlib import contextmanager
+from typing import Any
+
+import numpy as np
+
+from .errors import ImageIOError
+from .exr_io import is_plain_exr as _plain_exr
+from .exr_io import read_exr_pixels as _read_exr_pixels
+
+__all__ = ["read_image", "read_header", "read_pixel_type", "read_ahead", "FORMATS"]
+
+#: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
+FORMATS = {
+    ".exr": ("openexr", ("half", "float"), None, None),
+    ".hdr": ("hdr", ("float",), "float", 3),
+    ".tif": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
+    ".tiff": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
+    ".png": ("png", ("uint8", "uint16"), "uint8", 4),
+    ".jpg": ("jpeg", ("uint8",), "uint8", 3),
+    ".jpeg": ("jpeg", ("uint8",), "uint8", 3),
+}
+
+
+def _oiio():
+    import OpenImageIO
+
+    return OpenImageIO
+
+
+def read_image(path: str | os.PathLike, level: int = 0):
+    """Read one image file as float32 (H, W, C).
+
+    Takes the result of :func:`read_ahead` when that decoded this same, unchanged file.
+
+    Returns
+    -------
+    pixels, channel names, metadata dict, pixel type (``half``/``float``/``uint8``/``uint16``)
+    """
+    path = os.fspath(path)
+    ahead = _take_read_ahead(path, level)
+    if ahead is not None:
+        return ahead
+    return _decode(path, level)
+
+
+def _decode(path: str, level: int):
+    oiio = _oiio()
+    if not os.path.exists(path):
+        raise ImageIOError(f"input file not found: {path}")
+    if os.path.isdir(path):
+        raise ImageIOError(f"input is a directory, not an image: {path}")
+    # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
+    # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)
+    inp = oiio.ImageInput.open(path, config)
+    if inp is None:
+        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
+    try:
+        if level and not inp.seek_subimage(0, level):
+            raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
+        spec = inp.spec()
+        pixels = None
+        if level == 0 and _plain_exr(inp, spec):
+            pixels = _read_exr_pixels(path, spec)
+        if pixels is None:
+            pixels = inp.read_image(0, level, 0, spec.nchannels, oiio.FLOAT)
+        if pixels is None or inp.has_error:
+            raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
+        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
+        channels = tuple(spec.channelnames)
+        pixel_type = str(spec.format)
+    finally:
+        inp.close()
+    pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
+    return np.ascontiguousarray(pixels), channels, metadata, pixel_type
+
+
+@contextmanager
+def _open_input(path: str):
+    """An open OIIO ImageInput for ``path`` (closed on exit); one-line errors otherwise."""
+    oiio = _oiio()
+    if not os.path.isfile(path):
+        raise ImageIOError(f"input file not found: {path}")
+    inp = oiio.ImageInput.open(path)
+    if inp is None:
+        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
+    try:
+        yield inp
+    finally:
+        inp.close()
+
+
+def read_header(path: str | os.PathLike, level: int = 0):
+    """Read one image file's header without its pixels.
+
+    Returns
+    -------
+    width, height, channel names, metadata dict (of MIP level ``level``)
+    """
+    path = os.fspath(path)
+    with _open_input(path) as inp:
+        if level and not inp.seek_subimage(0, level):
+            raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
+        spec = inp.spec()
+        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
+        return spec.width, spec.height, tuple(spec.channelnames), metadata
+
+
+def read_pixel_type(path: str | os.PathLike) -> str:
+    """Pixel type of one image file (``half``, ``float``, ``uint8``...), from its header only."""
+    with _open_input(os.fspath(path)) as inp:
+        return str(inp.spec().format)
+
+
+def _first_line(message: str) -> str:
+    message = (message or "unknown error").strip()
+    return message.splitlines()[0] if message else "unknown error"
+
+
+_DESCRIPTION_TAG = re.compile(r"\s*envconv:(layout|size|guard|face|level)=(\S+)")
+
+
+def _tags_from_description(metadata: dict[str, Any]) -> dict[str, Any]:
+    """Move envconv tags found in ImageDescription into ``envconv:*`` keys (if not present)."""
+    description = metadata.get("ImageDescription")
+    if not isinstance(description, str) or "envconv:" not in description:
+        return metadata
+    for key, value in _DESCRIPTION_TAG.findall(description):
+        metadata.setdefault(f"envconv:{key}", value)
+    rest = _DESCRIPTION_TAG.sub("", description).strip()
+    if rest:
+        metadata["ImageDescription"] = rest
+    else:
+        del metadata["ImageDescription"]
+    return metadata
+
+
+# --- read-ahead ---------------------------------------------------------------------------------
+#
+# One slot: the command line reads ahead at most one input. The key holds the file's identity,
+# size and modification time, so a file replaced or rewritten in between is decoded again.
+
+_ahead_lock = threading.Lock()
+_ahead: dict[str, Any] = {}
+
+
+def _file_key(path: str, level: int):
+    try:
+        info = os.stat(path)
+    except OSError:
+        return None
+    if not stat.S_ISREG(info.st_mode):
+        return None
+    return (os.path.realpath(path), level, info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
+
+
+def read_ahead(path: str | os.PathLike, level: int = 0) -> bool:
+    """Start decoding ``path`` on a helper thread; False when it is not a regular file.
+
+    The next :func:`read_image` of the same unchanged file waits for that thread and takes its
+    pixels instead of decoding again. A failed read-ahead is forgotten and the file is decoded
+    again, so errors read as they always do. The helper is not a daemon thread: the process
+    waits for it at exit instead of tearing the image libraries down under it.
+    """
+    path = os.fspath(path)
+    key = _file_key(path, level)
+    if key is None:
+        return False
+    box: dict[str, Any] = {}
+
+    def decode() -> None:
+        try:
+            box["result"] = _decode(path, level)
+        except BaseException:  # noqa: BLE001 -- read_image decodes again and reports it
+            pass
+
+    thread = threading.Thread(target=decode, name="envconv-read-ahead")
+    with _ahead_lock:
+        _ahead.clear()
+        _ahead.update(key=key, thread=thread, box=box)
+    thread.start()
+    return True
+
+
+def _take_read_ahead(path: str, level: int):
+    """The read-ahead result for ``path`` if it is this file's, else None. Empties the slot."""
+    with _ahead_lock:
+        if not _ahead:
+            return None
+        key, thread, box = _ahead["key"], _ahead["thread"], _ahead["box"]
+        if key != _file_key(path, level):
+            return None
+        _ahead.clear()
+    thread.join()
+    return box.get("result")

@@ -1,0 +1,185 @@
+"""A one-shot command's start-up: the read-ahead, lazy imports and cached-kernel loading.
+
+These are the parts of ``envconv convert``'s wall time that come before and around the work
+(see benchmarks/bench.py e2e for the figures). Each test checks what a user relies on: the
+same pixels whichever way they were decoded or loaded, and no heavy import where none is used.
+"""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+import threading
+
+import numpy as np
+import pytest
+from conftest import write_plain
+
+import envconv
+import envconv.imagefile as imagefile
+
+ENVCONV = os.path.join(os.path.dirname(sys.executable), "envconv")
+
+
+def _image(path, seed, shape=(16, 32, 3)):
+    pixels = np.random.default_rng(seed).uniform(0, 50, shape).astype(np.float32)
+    write_plain(path, pixels)
+    return pixels
+
+
+@pytest.fixture
+def decodes(monkeypatch):
+    """Every decode of a file, with the name of the thread that ran it."""
+    calls = []
+    original = imagefile._decode
+
+    def counting(path, level):
+        calls.append((os.path.basename(path), threading.current_thread().name))
+        return original(path, level)
+
+    monkeypatch.setattr(imagefile, "_decode", counting)
+    yield calls
+    imagefile._ahead.clear()
+
+
+def test_read_ahead_decodes_once_on_its_thread_and_gives_the_same_pixels(tmp_path, decodes):
+    pixels = _image(tmp_path / "a.exr", 1)
+    assert imagefile.read_ahead(tmp_path / "a.exr")
+    got, channels, _, pixel_type = imagefile.read_image(tmp_path / "a.exr")
+    np.testing.assert_array_equal(got, pixels)
+    assert channels == ("R", "G", "B") and pixel_type == "float"
+    assert decodes == [("a.exr", "envconv-read-ahead")]
+    # The slot is emptied: the next read decodes again, on the caller's thread.
+    imagefile.read_image(tmp_path / "a.exr")
+    assert decodes[1] == ("a.exr", threading.current_thread().name)
+
+
+def test_read_ahead_of_a_file_rewritten_since_is_not_used(tmp_path, decodes):
+    path = tmp_path / "a.exr"
+    _image(path, 1)
+    assert imagefile.read_ahead(path)
+    imagefile._ahead["thread"].join()
+    newer = _image(path, 2)  # same size on disk, new content and modification time
+    os.utime(path, ns=(os.stat(path).st_atime_ns, os.stat(path).st_mtime_ns + 10**9))
+    got = imagefile.read_image(path)[0]
+    np.testing.assert_array_equal(got, newer)
+    assert len(decodes) == 2
+
+
+def test_read_ahead_of_another_file_is_not_used(tmp_path, decodes):
+    _image(tmp_path / "a.exr", 1)
+    b = _image(tmp_path / "b.exr", 2)
+    assert imagefile.read_ahead(tmp_path / "a.exr")
+    np.testing.assert_array_equal(imagefile.read_image(tmp_path / "b.exr")[0], b)
+    assert [name for name, _ in decodes] == ["a.exr", "b.exr"]
+
+
+def test_read_ahead_of_a_damaged_file_reports_as_a_plain_read_does(tmp_path, decodes):
+    path = tmp_path / "bad.exr"
+    _image(path, 1)
+    path.write_bytes(path.read_bytes()[:200])  # a truncated file
+    with pytest.raises(envconv.ImageIOError) as plain:
+        imagefile.read_image(path)
+    assert imagefile.read_ahead(path)
+    with pytest.raises(envconv.ImageIOError) as ahead:
+        imagefile.read_image(path)
+    assert str(ahead.value) == str(plain.value)
+
+
+def test_read_ahead_skips_what_is_not_a_regular_file(tmp_path):
+    assert not imagefile.read_ahead(tmp_path / "missing.exr")
+    assert not imagefile.read_ahead(tmp_path)
+    assert not imagefile._ahead
+
+
+def test_cli_reads_ahead_the_input_it_guesses(tmp_path, monkeypatch):
+    """The first argument after the command that names an existing image file; never with
+    --dry-run or --help, never for commands that take no single input."""
+    import envconv.cli  # noqa: F401
+
+    main_module = sys.modules["envconv.cli.main"]
+    started = []
+
+    def read_ahead(path):
+        regular = os.path.isfile(path)  # as imagefile.read_ahead decides
+        if regular:
+            started.append(path)
+        return regular
+
+    monkeypatch.setattr(imagefile, "read_ahead", read_ahead)
+    _image(tmp_path / "in.exr", 1)
+    (tmp_path / "latlong").write_text("not an image")
+    inp, out = str(tmp_path / "in.exr"), str(tmp_path / "out.exr")
+    monkeypatch.chdir(tmp_path)
+    for args, expected in [
+        (["convert", inp, out, "--to", "latlong"], [inp]),
+        (["convert", "--to", "latlong", inp, out], [inp]),
+        (["info", inp, "--json"], [inp]),
+        (["read", inp, "resample", "--to", "sphere", "write", out], [inp]),
+        (["convert", inp, out, "--to", "latlong", "--dry-run"], []),
+        (["convert", "--help"], []),
+        (["batch", str(tmp_path), "resample", "--to", "latlong"], []),
+        (["convert", "missing.exr", out, "--to", "latlong"], []),
+    ]:
+        started.clear()
+        main_module._read_ahead_input(args)
+        assert started == expected, args
+
+
+def _run_python(code: str) -> str:
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    return done.stdout
+
+
+def test_importing_the_command_line_loads_neither_numba_nor_the_layouts():
+    """The entry point stays light until a command needs the kernels, so that the read-ahead
+    starts before numba is imported."""
+    out = _run_python(
+        "import sys, envconv, envconv.cli, envconv.imagefile\n"
+        "print(sorted(m for m in ('numba', 'envconv.layouts', 'envconv.resample') if m in sys.modules))"
+    )
+    assert out.strip() == "[]"
+
+
+def test_lazy_package_attributes_resolve_and_unknown_names_fail():
+    assert envconv.read is envconv.io.read and envconv.convert is envconv.resample.convert
+    assert envconv.EnvMap is envconv.envmap.EnvMap
+    assert "convert" in dir(envconv)
+    with pytest.raises(AttributeError):
+        envconv.no_such_name  # noqa: B018
+
+
+def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries(tmp_path):
+    """numba's cache loader would import and install all of its typing and lowering registries
+    (numba.np.linalg among them) first; envconv's dispatchers skip that. The pixels a fresh
+    process computes from the cache must equal this process's, bit for bit, for the main
+    kernels: resampling (parallel), the rip-map and a mip chain."""
+    import analytic
+    import naive
+
+    source = envconv.EnvMap(naive.pixel_average("latlong", 64, analytic.radiance, samples=2), "latlong")
+    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
+    source = envconv.read(tmp_path / "src.exr")
+    jobs = {"cross": dict(to="cube-vcross", size=32), "mips": dict(to="latlong", size=32, mips=True),
+            "ball": dict(to="sphere", size=48, samples=3, filter="bicubic")}  # fmt: skip
+    expected = {}
+    for name, kwargs in jobs.items():  # also fills the cache for these signatures
+        result = envconv.convert(source, **kwargs)
+        expected[name] = result.levels if kwargs.get("mips") else [result.pixels]
+    code = (
+        "import sys, numpy as np, envconv\n"
+        f"source = envconv.read({str(tmp_path / 'src.exr')!r})\n"
+        f"for name, kwargs in {jobs!r}.items():\n"
+        "    r = envconv.convert(source, **kwargs)\n"
+        "    levels = r.levels if kwargs.get('mips') else [r.pixels]\n"
+        f"    np.savez({str(tmp_path)!r} + '/' + name + '.npz', *levels)\n"
+        "print('numba.np.linalg' in sys.modules)\n"
+    )
+    assert _run_python(code).strip() == "False"
+    for name, levels in expected.items():
+        with np.load(tmp_path / f"{name}.npz") as saved:
+            assert len(saved.files) == len(levels)
+            for k, level in enumerate(levels):
+                np.testing.assert_array_equal(saved[f"arr_{k}"], level, err_msg=name)
