@@ -32,8 +32,9 @@ def _oiio_threads(name: str, default: int) -> int:
     return OpenImageIO.get_int_attribute(name, default)
 
 
-def _set_openexr_threads(compression: str = "zip") -> None:
-    """Size OpenEXR's global thread pool from OIIO's ``exr_threads`` (0: all cores).
+def _set_openexr_threads(compression: str = "zip", threads: int | None = None) -> None:
+    """Size OpenEXR's global thread pool from OIIO's ``exr_threads`` (0: all cores), or to
+    ``threads`` when given.
 
     Uncompressed and RLE data gain nothing from helper threads (0.047 s alone against 0.06 s on
     two for a 512 cross), so those run on the calling thread. The pool is resized only when the
@@ -43,7 +44,8 @@ def _set_openexr_threads(compression: str = "zip") -> None:
     setter = getattr(OpenEXR, "set_global_thread_count", None)
     if setter is None:  # OpenEXR < 3.3: single-threaded
         return
-    threads = _oiio_threads("exr_threads", 0)
+    if threads is None:
+        threads = _oiio_threads("exr_threads", 0)
     if threads <= 0:
         threads = os.cpu_count() or 1
     if threads == 1 or compression in ("none", "rle"):
@@ -67,15 +69,16 @@ def is_plain_exr(inp, spec) -> bool:
     )
 
 
-def read_exr_pixels(path: str, spec):
+def read_exr_pixels(path: str, spec, threads: int | None = None):
     """Pixels (H, W, C) float32 of a plain scanline EXR, in ``spec``'s channel order, decoded by
     the OpenEXR library itself: its zip decoder (libdeflate) takes half the time of the one
-    OIIO's wheel links. None when it declines or fails, and OIIO reads the file instead."""
+    OIIO's wheel links. None when it declines or fails, and OIIO reads the file instead.
+    ``threads`` overrides OIIO's ``exr_threads`` (see :func:`_set_openexr_threads`)."""
     import OpenEXR
 
     names = list(spec.channelnames)
     grouped = names in (["R", "G", "B"], ["R", "G", "B", "A"])
-    _set_openexr_threads(spec.get_string_attribute("compression", "zip"))
+    _set_openexr_threads(spec.get_string_attribute("compression", "zip"), threads)
     try:
         with OpenEXR.File(path, separate_channels=not grouped) as exr:
             channels = exr.channels()

@@ -34,9 +34,9 @@ def decodes(monkeypatch):
     calls = []
     original = imagefile._decode
 
-    def counting(path, level):
+    def counting(path, level, threads=None):
         calls.append((os.path.basename(path), threading.current_thread().name))
-        return original(path, level)
+        return original(path, level, threads)
 
     monkeypatch.setattr(imagefile, "_decode", counting)
     yield calls
@@ -183,3 +183,34 @@ def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries
             assert len(saved.files) == len(levels)
             for k, level in enumerate(levels):
                 np.testing.assert_array_equal(saved[f"arr_{k}"], level, err_msg=name)
+
+
+@pytest.mark.parametrize("full_exit", ["", "1"])
+def test_the_console_script_ends_alike_with_or_without_interpreter_teardown(tmp_path, full_exit):
+    """envconv ends with os._exit after the interpreter's own shutdown steps (threads, atexit
+    handlers, flushed streams); ENVCONV_FULL_EXIT=1 exits the ordinary way. Both must give the
+    same status, output and files."""
+    env = {**os.environ, "ENVCONV_FULL_EXIT": full_exit}
+    source = tmp_path / "in.exr"
+    _image(source, 3)
+    ok = subprocess.run([ENVCONV, "convert", str(source), str(tmp_path / "out.exr"), "--to",
+                         "cube-vcross", "--size", "8", "--from", "latlong"],
+                        capture_output=True, text=True, env=env)  # fmt: skip
+    assert ok.returncode == 0, ok.stderr
+    assert ok.stdout.strip() == str(tmp_path / "out.exr") and (tmp_path / "out.exr").is_file()
+    bad = subprocess.run([ENVCONV, "convert", str(tmp_path / "missing.exr"), str(tmp_path / "o.exr"),
+                          "--to", "latlong"], capture_output=True, text=True, env=env)  # fmt: skip
+    assert bad.returncode == 1 and len(bad.stderr.strip().splitlines()) == 1
+    usage = subprocess.run([ENVCONV, "convert", str(source)], capture_output=True, text=True, env=env)
+    assert usage.returncode == 2
+    code = (
+        "import atexit, sys\n"
+        "atexit.register(lambda: print('atexit ran', flush=False))\n"
+        "sys.argv = ['envconv', 'layouts']\n"
+        "from envconv.cli import main\n"
+        "main()\n"
+    )
+    handlers = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert handlers.returncode == 0
+    assert handlers.stdout.splitlines()[0].startswith("latlong")
+    assert handlers.stdout.splitlines()[-1] == "atexit ran"
