@@ -124,3 +124,21 @@ def test_standalone_commands_still_work(sky, tmp_path):
     out = tmp_path / "c.exr"
     result = run_cli(["convert", sky, out, "--to", "cube-hcross", "--size", 8])
     assert result.exit_code == 0 and io.read(out).layout.name == "cube-hcross"
+
+
+def test_the_lazy_command_table_names_every_command_and_its_module():
+    """``envconv.cli.main.COMMANDS`` lets the CLI import one command's module: it must list
+    exactly the commands the modules define, each with the module that defines it."""
+    import importlib
+    import sys
+
+    import envconv.cli  # noqa: F401
+
+    main_module = sys.modules["envconv.cli.main"]
+    for module in set(main_module.COMMANDS.values()):
+        importlib.import_module(f"envconv.cli.{module}")
+    registered = main_module.cli.commands
+    assert set(registered) == set(main_module.COMMANDS)
+    for name, command in registered.items():
+        defined_in = command.callback.__module__.rsplit(".", 1)[-1]
+        assert defined_in == main_module.COMMANDS[name], name

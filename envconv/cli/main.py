@@ -24,19 +24,26 @@ import click
 from .. import __version__
 from ..errors import EnvconvError
 
-__all__ = ["cli", "main", "EnvconvCommand", "COMMAND_MODULES"]
+__all__ = ["cli", "main", "EnvconvCommand", "COMMANDS"]
 
-#: Modules under envconv.cli that register commands; loaded on first use of the group.
-COMMAND_MODULES = ("convert", "info", "layouts", "chain", "run", "batch", "pattern")
+#: Every command, and the module under envconv.cli that defines it. A module is imported when
+#: one of its commands is used (or help lists them all), so ``convert`` does not import the
+#: batch, graph and pattern machinery. tests/test_cli_chain.py checks this table.
+COMMANDS = {
+    "batch": "batch", "colorspace": "chain", "convert": "convert", "exposure": "chain",
+    "info": "info", "layouts": "layouts", "pattern": "pattern", "read": "chain",
+    "resample": "chain", "rotate": "chain", "run": "run", "write": "chain",
+}  # fmt: skip
 #: Commands that run on their own and cannot be chained with others.
 STANDALONE = {"convert", "info", "layouts", "run", "pattern"}
 
 
-def _load_commands() -> None:
+def _load_commands(names=None) -> None:
+    """Import the modules that define ``names`` (default: every command)."""
     import importlib
 
-    for name in COMMAND_MODULES:
-        importlib.import_module(f"{__package__}.{name}")
+    for module in sorted({COMMANDS[n] for n in (COMMANDS if names is None else names) if n in COMMANDS}):
+        importlib.import_module(f"{__package__}.{module}")
 
 
 def _split_chain(command: click.Command, names: set[str], args: list[str]):
@@ -108,11 +115,10 @@ class EnvconvGroup(click.Group):
         sys.exit(result if isinstance(result, int) else 0)
 
     def list_commands(self, ctx):
-        _load_commands()
-        return super().list_commands(ctx)
+        return sorted(COMMANDS)
 
     def get_command(self, ctx, cmd_name):
-        _load_commands()
+        _load_commands([cmd_name])
         return super().get_command(ctx, cmd_name)
 
     def resolve_command(self, ctx, args):
@@ -248,7 +254,6 @@ def _finish(code: int) -> None:
 def main() -> None:
     """Console-script entry point."""
     _read_ahead_input(sys.argv[1:])
-    _load_commands()
     try:
         cli.main(prog_name="envconv", standalone_mode=True)
     except SystemExit as exc:
