@@ -7,6 +7,5 @@ cd "$(dirname "$0")"
 venv="${ENVCONV_VENV:-.venv}"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --upgrade pip
-# compat: a plain path entry; the default editable finder costs every process 16 ms at start-up
-"$venv/bin/python" -m pip install --quiet -e . --config-settings editable_mode=compat
+"$venv/bin/python" -m pip install --quiet -e .
 exec "$venv/bin/python" examples/every_layout.py "${1:-examples/data/park-latlong-512.exr}" examples/out

@@ -6,7 +6,6 @@ cd "$(dirname "$0")"
 venv="${ENVCONV_VENV:-.venv}"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --upgrade pip
-# compat: a plain path entry; the default editable finder costs every process 16 ms at start-up
-"$venv/bin/python" -m pip install --quiet -e '.[test]' --config-settings editable_mode=compat
+"$venv/bin/python" -m pip install --quiet -e '.[test]'
 "$venv/bin/ruff" check envconv tests benchmarks examples
 exec "$venv/bin/python" -m pytest "$@"
