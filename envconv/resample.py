@@ -181,7 +181,16 @@ def convert(
     src = envmap.pixels
     alpha_index = envmap.alpha_index
     out = np.empty((height, width, src.shape[2]), np.float32)
-    coverage = np.empty((height, width), np.float32)
+    same_grid = (
+        to.name == envmap.layout.name
+        and size == envmap.size
+        and guard_px == envmap.guard
+        and n_samples in (None, 1)
+        and np.array_equal(rot, np.eye(3))
+    )
+    # The coverage is kept for an alpha channel, the mip chain and the same-grid copy below.
+    needs_coverage = alpha or mips or same_grid
+    coverage = np.empty((height, width) if needs_coverage else (1, 1), np.float32)
     sgeo = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
     dgeo, d_cell_face, d_cell_turns, _ = kernel_geometry(to, size, guard_px)
     log.debug(
@@ -200,13 +209,7 @@ def convert(
         src, rip, rip_levels, *sgeo, dgeo, d_cell_face, d_cell_turns,
         1.0, 1.0, n_samples or 0, FILTERS[filter], rot, fill, out, coverage, weights,
     )  # fmt: skip
-    if (
-        to.name == envmap.layout.name
-        and size == envmap.size
-        and guard_px == envmap.guard
-        and n_samples in (None, 1)
-        and np.array_equal(rot, np.eye(3))
-    ):
+    if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
         # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
         np.copyto(out, src, where=coverage[:, :, None] > 0)

@@ -85,6 +85,18 @@ def test_alpha_is_never_multiplied_into_colour(sky):
     assert partial.any() and np.all(with_alpha.pixels[partial][:, :3] > 0.05)
 
 
+@pytest.mark.parametrize("name", ["cube-vcross", "sphere", "angular", "tennisball", "latlong"])
+@pytest.mark.parametrize("samples", [None, 2])
+def test_colour_is_the_same_whether_or_not_coverage_is_kept(sky, name, samples):
+    """Without alpha (or mips) the kernel is given no coverage buffer; the colour it writes,
+    empty cells included, must not change."""
+    with_alpha = envconv.convert(sky, name, size=N, samples=samples, alpha=True)
+    without = envconv.convert(sky, name, size=N, samples=samples)
+    np.testing.assert_array_equal(with_alpha.pixels[..., :3], without.pixels)
+    if name in ("cube-vcross", "sphere", "angular"):  # these have pixels outside the map
+        assert with_alpha.pixels[..., 3].min() == 0.0
+
+
 @pytest.mark.parametrize("ext, bit_depth", [("exr", "half"), ("exr", "float"), ("tif", "float"),
                                             ("tif", "uint16"), ("png", "uint8"), ("png", "uint16")])  # fmt: skip
 def test_alpha_round_trips_without_touching_colour(sky, tmp_path, ext, bit_depth):

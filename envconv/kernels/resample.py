@@ -98,6 +98,8 @@ def resample_rows(
 ):  # fmt: skip
     """Fill ``out`` (H, W, C float32) and ``alpha`` (H, W float32); see the module docstring.
 
+    Pass a (1, 1) ``alpha`` when the coverage is not wanted: a 4096 cross then needs 50 MB less.
+
     ``weights`` (H, W float64) receives each pixel's sum of sub-sample weights (the solid-angle
     density of its readable sub-samples), from which the mip chain averages blocks of pixels
     with exactly the weights used here; pass a (1, 1) array to skip it.
@@ -138,6 +140,7 @@ def resample_rows(
     # that size map every sub-sample exactly: near a pole or along a seam that is a thin strip.
     min_subtile = 4 if samples == 1 else MIN_SUBTILE
     keep_weights = weights.shape[0] == height and weights.shape[1] == width
+    keep_alpha = alpha.shape[0] == height and alpha.shape[1] == width
     for band in prange(n_bands):
         acc = np.zeros(nch, np.float64)
         tmp = np.zeros(3 * nch, np.float64)
@@ -166,7 +169,8 @@ def resample_rows(
                     for j in range(j0, j1):
                         for i in range(i0, i1):
                             out[j, i, :] = 0.0
-                            alpha[j, i] = 0.0
+                            if keep_alpha:
+                                alpha[j, i] = 0.0
                             if keep_weights:
                                 weights[j, i] = 0.0
                     continue
@@ -378,7 +382,8 @@ def resample_rows(
 
 @jit_inline
 def _store(out, alpha, j, i, acc, wsum, coverage):
-    """Write the normalised accumulator and the coverage of output pixel (i, j)."""
+    """Write the normalised accumulator and the coverage of output pixel (i, j); the coverage
+    only where ``alpha`` has that pixel (a (1, 1) stand-in skips it)."""
     nch = out.shape[2]
     if wsum > 0.0:
         inv = 1.0 / wsum
@@ -387,4 +392,5 @@ def _store(out, alpha, j, i, acc, wsum, coverage):
     else:
         for c in range(nch):
             out[j, i, c] = 0.0
-    alpha[j, i] = coverage
+    if j < alpha.shape[0] and i < alpha.shape[1]:
+        alpha[j, i] = coverage
