@@ -65,7 +65,7 @@ def bench_kernel(samples=(1, 2, 4, 0), repeats: int = 3) -> None:
         times = []
         for _ in range(repeats + 1):  # the first run is a warm-up
             t = time.perf_counter()
-            rips = source_rips(src, src.pixels, s or None, "bilinear")
+            rips = source_rips(src, src.pixels, s or None, "bilinear", to, n)
             resample_rows(src.pixels, *rips, *sgeo, dgeo, cf, ct, 1.0, 1.0, s, 1, rot, False, out, alpha, no_weights)
             times.append(time.perf_counter() - t)
         times = times[1:]

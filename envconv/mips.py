@@ -109,7 +109,7 @@ def _run_direct(source, sgeo, rot, dgeo_all, fill, shape, scale, samples, filt):
     source = np.ascontiguousarray(source)
     no_rips = np.zeros((1, 1, source.shape[2]), np.float32)  # mips use one fixed S
     resample_rows(
-        source, no_rips, 0, *sgeo, dgeo, d_cell_face, d_cell_turns,
+        source, no_rips, 0, 0, *sgeo, dgeo, d_cell_face, d_cell_turns,
         float(scale[0]), float(scale[1]), int(samples), filt, rot, bool(fill), out, coverage,
         weights,
     )  # fmt: skip

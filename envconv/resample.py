@@ -202,11 +202,11 @@ def convert(
         filter,
     )
     src = np.ascontiguousarray(src)
-    rip, rip_levels = source_rips(envmap, src, n_samples, filter)
+    rip, rip_levels, rip_row_count = source_rips(envmap, src, n_samples, filter, to, size)
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
     weights = np.empty((height, width) if mips else (1, 1), np.float64)
     resample_rows(
-        src, rip, rip_levels, *sgeo, dgeo, d_cell_face, d_cell_turns,
+        src, rip, rip_levels, rip_row_count, *sgeo, dgeo, d_cell_face, d_cell_turns,
         1.0, 1.0, n_samples or 0, FILTERS[filter], rot, fill, out, coverage, weights,
     )  # fmt: skip
     if same_grid:
@@ -244,9 +244,21 @@ def convert(
     )
 
 
-def source_rips(envmap: EnvMap, src: np.ndarray, samples: int | None, filter: str):
-    """(rip-map, levels) for the kernel: a lat-long source's horizontal rip-map when adaptive
-    sampling with the bilinear filter will read it, else an empty stand-in and 0."""
+def source_rips(
+    envmap: EnvMap,
+    src: np.ndarray,
+    samples: int | None,
+    filter: str,
+    to: Layout | str | None = None,
+    size: int | None = None,
+):
+    """(rip-map, levels, rows) for the kernel: a lat-long source's horizontal rip-map when
+    adaptive sampling with the bilinear filter will read it, else an empty stand-in, 0 and 0.
+
+    Only the rows next to each pole where output pixels of ``to`` at ``size`` can span enough
+    texels along x to read a level are filled (:func:`rip_rows`); without ``to`` and ``size``,
+    every row.
+    """
     from .kernels.ripmap import build_rips
 
     if (
@@ -255,8 +267,50 @@ def source_rips(envmap: EnvMap, src: np.ndarray, samples: int | None, filter: st
         and envmap.layout.name == "latlong"
         and not envmap.guard
     ):
-        return build_rips(src)
-    return np.zeros((1, 1, src.shape[2]), np.float32), 0
+        height = src.shape[0]
+        rows = height if to is None or size is None else rip_rows(src.shape[1], height, to, size)
+        rip, levels = build_rips(src, rows)
+        return rip, levels, rows
+    return np.zeros((1, 1, src.shape[2]), np.float32), 0, 0
+
+
+#: Output pitch is estimated from √Ω, which understates an anisotropic pixel's longer edge.
+_ANISOTROPY = 2.0
+
+
+def rip_rows(width: int, height: int, to: Layout | str, size: int) -> int:
+    """Rows next to each pole of a ``width`` × ``height`` lat-long whose rip-map levels output
+    pixels of layout ``to`` at ``size`` may read.
+
+    A pixel reads level 1 or above where its two edges span at least 2 · RIP_MIN_SPAN texels
+    along x (:mod:`envconv.kernels.footprint`). An edge of θ radians spans at most
+    W θ / (2π cos φ) texels along x at latitude φ, so that happens only where
+    cos φ ≤ W · 2 θ_max / (2π · 2 RIP_MIN_SPAN). θ_max is the largest pixel pitch √Ω of the
+    output over 4096 directions, times 2 for anisotropy; the rows are widened by θ_max (the
+    pixel's own reach) and 3 rows. This is an estimate, not a bound: the kernel reads level 0
+    wherever a pixel could reach an unfilled row, so a low estimate costs speed, never accuracy.
+    Layouts with a singular rim (a mirror ball) fill every row.
+    """
+    from .kernels.footprint import RIP_MIN_SPAN
+    from .kernels.mapping import dir_density
+
+    layout = get_layout(to)
+    count = 4096
+    k = np.arange(count) + 0.5
+    polar = np.arccos(1.0 - 2.0 * k / count)
+    azimuth = math.pi * (1.0 + 5.0**0.5) * k
+    dirs = np.stack([np.sin(polar) * np.sin(azimuth), np.cos(polar),
+                     np.sin(polar) * np.cos(azimuth)], -1)  # fmt: skip
+    geo, _, _, _ = kernel_geometry(layout, 64, 0)
+    density = np.zeros(count)
+    dir_density(geo, np.ascontiguousarray(dirs), density)
+    # A pixel spans 2/(aspect N) × 2/N in (a, b) (see geometry.horizon_pitch).
+    pitch = _ANISOTROPY * float(np.sqrt(np.max(density) * 4.0 / layout.aspect)) / size
+    cos_limit = width * 2.0 * pitch / (2.0 * math.pi * 2.0 * RIP_MIN_SPAN)
+    if not np.isfinite(pitch) or cos_limit >= 1.0:
+        return height
+    from_pole = math.pi / 2 - math.acos(cos_limit) + pitch
+    return min(height, int(math.ceil(from_pole / (math.pi / height))) + 3)
 
 
 def _check_guard(guard) -> int:

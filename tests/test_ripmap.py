@@ -128,7 +128,7 @@ def _convert_without_rips(source, n, samples):
     sgeo = kernel_geometry(source.layout, source.size, 0)
     no_rips = np.zeros((1, 1, 3), np.float32)
     resample_rows(
-        source.pixels, no_rips, 0, *sgeo, dgeo, cf, ct, 1.0, 1.0, samples, 1, np.eye(3),
+        source.pixels, no_rips, 0, 0, *sgeo, dgeo, cf, ct, 1.0, 1.0, samples, 1, np.eye(3),
         False, out, alpha, np.empty((1, 1)),
     )  # fmt: skip
     return out
@@ -153,3 +153,80 @@ def test_polar_caps_read_through_the_rip_map_match_the_pixel_average(stripes_sou
     assert with_rips <= max(1.25 * brute_force, 0.01), (with_rips, brute_force)
     assert single_tap >= 10 * with_rips, (single_tap, with_rips)
     assert not math.isnan(with_rips)
+
+
+def test_only_the_polar_rows_are_filled_and_they_equal_a_full_build():
+    rng = np.random.default_rng(2)
+    src = rng.random((32, 64, 3)).astype(np.float32)
+    full, levels = build_rips(src)
+    poisoned = np.full_like(full, np.nan)
+    partial, _ = build_rips(src, rows=5, out=poisoned)
+    filled = np.zeros(32, bool)
+    filled[:5] = filled[-5:] = True
+    np.testing.assert_array_equal(partial[filled], full[filled])
+    assert np.isnan(partial[~filled]).all()
+
+
+def _poisoned_rips(monkeypatch, rows=None):
+    """Make source_rips fill unfilled rip-map rows with NaN, and optionally fix the row count."""
+    import envconv.kernels.ripmap as ripmap_module
+    import envconv.resample as resample_module
+
+    original = ripmap_module.build_rips
+
+    def poisoned(src, rows=None, out=None):
+        height, width, nch = src.shape
+        levels = rip_level_count(width)
+        shape = (height, width - (width >> levels), nch)
+        return original(src, rows, np.full(shape, np.nan, np.float32))
+
+    monkeypatch.setattr(ripmap_module, "build_rips", poisoned)
+    if rows is not None:
+        monkeypatch.setattr(resample_module, "rip_rows", lambda *args: rows)
+
+
+@pytest.mark.parametrize(
+    "to, size, rotate",
+    [("cube-vcross", 128, None), ("latlong", 192, (20, 35, 10)), ("paraboloid", 256, (0, 60, 0))],
+)
+def test_rows_filled_near_the_poles_give_the_pixels_of_a_full_rip_map(
+    stripes_source, monkeypatch, to, size, rotate
+):
+    """The estimate of rows a conversion reads through the rip-map covers what it reads: the
+    pixels are those of a rip-map filled in every row, bit for bit, and none is NaN although
+    the unfilled rows are. (Each case fills under half the rows, and reads the rip-map: without
+    it the pixels differ.)"""
+    import envconv.resample as resample_module
+
+    source = envconv.EnvMap(stripes_source, "latlong")
+    height, width = stripes_source.shape[:2]
+    assert 2 * resample_module.rip_rows(width, height, to, size) < height
+    with monkeypatch.context() as patch:
+        patch.setattr(resample_module, "rip_rows", lambda *args: height)
+        expected = envconv.convert(source, to, size=size, rotate=rotate).pixels
+        patch.setattr(resample_module, "rip_rows", lambda *args: 0)
+        level_0 = envconv.convert(source, to, size=size, rotate=rotate).pixels
+    assert (level_0 != expected).any()
+    _poisoned_rips(monkeypatch)
+    got = envconv.convert(source, to, size=size, rotate=rotate).pixels
+    np.testing.assert_array_equal(got, expected)
+
+
+@pytest.mark.parametrize("to", ["cube-vcross", "sphere", "angular"])
+def test_pixels_that_could_reach_an_unfilled_row_read_level_0(stripes_source, monkeypatch, to):
+    """With only 4 rows filled at each pole (far fewer than the caps need), the kernel must
+    never read the others: no NaN, and the polar caps stay as close to the analytic pixel
+    average as brute-force sub-sampling."""
+    n = 48
+    source = envconv.EnvMap(stripes_source, "latlong")
+    _poisoned_rips(monkeypatch, rows=4)
+    got = envconv.convert(source, to, size=n).pixels
+    assert np.isfinite(got).all()
+    if to == "cube-vcross":
+        truth = naive.pixel_average("cube-vcross", n, _stripes, samples=24)
+        caps = np.zeros(truth.shape[:2], bool)
+        caps[0:n, n : 2 * n] = caps[2 * n : 3 * n, n : 2 * n] = True
+        brute_force = _convert_without_rips(source, n, 0)
+        rms = float(np.sqrt(np.mean((got[caps] - truth[caps]) ** 2)))
+        brute = float(np.sqrt(np.mean((brute_force[caps] - truth[caps]) ** 2)))
+        assert rms <= max(1.25 * brute, 0.01), (rms, brute)

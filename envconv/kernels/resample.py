@@ -45,6 +45,42 @@ from .tiles import (
 __all__ = ["resample_rows"]
 
 
+# Rows beyond a footprint's reach that a rip-map read may touch: the bilinear tap's second row,
+# the continuation over a pole, and the slack of interpolated tiles.
+RIP_ROW_MARGIN = 3.0
+
+
+@jit_inline
+def _rows_built(y, extent, rip_rows, height):
+    """Whether sub-samples within ``extent`` source rows of row position ``y`` stay in the
+    rip-map rows that were filled: the ``rip_rows`` next to each pole."""
+    if 2 * rip_rows >= height:
+        return True
+    reach = extent + RIP_ROW_MARGIN
+    return y + reach <= rip_rows or y - reach >= height - rip_rows
+
+
+@jit_inline
+def _y_part(span, x_part):
+    """Source-y component of an edge ``span`` texels long whose x component is ``x_part``."""
+    return math.sqrt(max(span * span - x_part * x_part, 0.0))
+
+
+@jit_inline
+def _centre_source_y(
+    sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam,
+    i, j, scale_x, scale_y, rot, fill,
+):  # fmt: skip
+    """Source row position of output pixel (i, j)'s centre (the middle row if it has none)."""
+    face, a, b, readable, valid = _output_sample(
+        dgeo, d_cell_face, d_cell_turns, (i + 0.5) * scale_x, (j + 0.5) * scale_y, fill
+    )
+    if not readable:
+        return 0.5 * sgeo[1]
+    sx, sy, cell = source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+    return sy
+
+
 @jit_inline
 def _exact_pixel(
     src, sgeo, s_cell_face, s_cell_turns, s_face_cell,
@@ -92,7 +128,7 @@ MAX_ROW_SAMPLES = 64
 
 @jit_parallel
 def resample_rows(
-    src, rip, rip_levels, sgeo, s_cell_face, s_cell_turns, s_face_cell,
+    src, rip, rip_levels, rip_rows, sgeo, s_cell_face, s_cell_turns, s_face_cell,
     dgeo, d_cell_face, d_cell_turns,
     scale_x, scale_y, samples, filt, rot, fill, out, alpha, weights,
 ):  # fmt: skip
@@ -105,8 +141,9 @@ def resample_rows(
     with exactly the weights used here; pass a (1, 1) array to skip it.
 
     ``rip`` holds ``rip_levels`` levels of a lat-long source's rip-map
-    (:func:`envconv.kernels.ripmap.build_rips`); pass ``rip_levels = 0`` (and any array of
-    src's type) when there is none. Levels are used only with adaptive sampling (samples ≤ 0)
+    (:func:`envconv.kernels.ripmap.build_rips`), filled in the ``rip_rows`` rows next to each
+    pole; a pixel or tile whose sub-samples could reach any other row reads level 0 instead.
+    Pass ``rip_levels = 0`` (and any array of src's type) when there is none. Levels are used only with adaptive sampling (samples ≤ 0)
     and the bilinear filter. Work is split into bands of TILE output rows, one band per
     parallel task, so the working set is bounded by a few rows whatever the image size.
     """
@@ -123,6 +160,7 @@ def resample_rows(
     if not (adaptive and fast_taps):
         rip_levels = 0
     s_width = s_aspect * s_n
+    s_height = src.shape[0]
     # Tiles small enough against an output cell (level-0 pixels) for the checks to hold.
     d_n, d_aspect = dgeo[1], dgeo[3]
     may_tile = (
@@ -215,6 +253,15 @@ def resample_rows(
                             )  # fmt: skip
                                 if rip_levels > 0 and x_of_x >= 0.0:
                                     level = rip_level(x_of_x + x_of_y, rip_levels)
+                                    if level > 0 and not _rows_built(
+                                        _centre_source_y(
+                                            sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face,
+                                            d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill,
+                                        ),
+                                        _y_part(span_x, x_of_x) + _y_part(span_y, x_of_y),
+                                        rip_rows, s_height,
+                                    ):  # fmt: skip
+                                        level = 0
                                 nx = auto_count(level_span(span_x, x_of_x, level))
                                 ny = auto_count(level_span(span_y, x_of_y, level))
                                 # A pixel not wholly in one cell's valid region (a rim, a cell
@@ -255,6 +302,15 @@ def resample_rows(
                                 + abs(grid[2, k, 0] - grid[0, k, 0]) * inv_th,
                             )
                         level = rip_level(x_extent, rip_levels)
+                        if level > 0:
+                            y_lo = math.inf
+                            y_hi = -math.inf
+                            for k in range(3):
+                                for m in range(3):
+                                    y_lo = min(y_lo, grid[k, m, 1])
+                                    y_hi = max(y_hi, grid[k, m, 1])
+                            if not _rows_built(0.5 * (y_lo + y_hi), y_hi - y_lo, rip_rows, s_height):
+                                level = 0
                     shrink = 1.0 / (1 << level)
                     edge_x = 0.0
                     edge_y = 0.0

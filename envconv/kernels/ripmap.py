@@ -54,9 +54,13 @@ def rip_offset(width, level):
 
 
 @jit_parallel
-def _fill_rips(src, levels, out):
+def _fill_rips(src, levels, rows, out):
     height, width, nch = src.shape
-    for j in prange(height):
+    filled = min(2 * rows, height)
+    for r in prange(filled):
+        j = np.int64(r)  # a parfor index may be unsigned: keep the row arithmetic signed
+        if j >= rows:
+            j += height - filled
         w1 = width >> 1
         for i in range(w1):
             for c in range(nch):
@@ -72,14 +76,21 @@ def _fill_rips(src, levels, out):
             prev = start
 
 
-def build_rips(src: np.ndarray) -> tuple[np.ndarray, int]:
-    """(packed levels, K) for a lat-long ``src`` (H, W, C) float32; K = 0 when none fit."""
+def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None = None):
+    """(packed levels, K) for a lat-long ``src`` (H, W, C) float32; K = 0 when none fit.
+
+    Only the ``rows`` rows next to each pole are filled (all rows when None): the array is
+    allocated whole but never touched elsewhere, so the memory of the other rows is not used
+    (the kernel never reads them; see ``rip_rows`` in :mod:`envconv.kernels.resample`).
+    ``out``, when given, is the (H, W − W / 2^K, C) float32 array to fill.
+    """
     height, width, nch = src.shape
     levels = rip_level_count(width)
     if levels == 0:
         return np.zeros((1, 1, nch), np.float32), 0
-    out = np.empty((height, width - (width >> levels), nch), np.float32)
-    _fill_rips(src, levels, out)
+    if out is None:
+        out = np.empty((height, width - (width >> levels), nch), np.float32)
+    _fill_rips(src, levels, height if rows is None else int(rows), out)
     return out, levels
 
 
