@@ -7,7 +7,7 @@
 
 ``import envconv`` is cheap: ``EnvMap``, ``read``, ``write``, ``convert`` and the submodules
 load on first use, so that the command line can start decoding its input before numba and
-the layouts are imported (see :mod:`envconv.imagefile`).
+the layouts are imported (see :mod:`envconv.file_io`).
 """
 
 from __future__ import annotations

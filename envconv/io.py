@@ -26,7 +26,7 @@ from .envmap import EnvMap
 from .errors import ImageIOError, LayoutError
 from .exr_io import prefer_openexr_writer as _prefer_openexr_writer
 from .exr_io import write_plain_exr as _write_plain_exr
-from .imagefile import (
+from .file_io import (
     FORMATS,
     _first_line,
     _oiio,

@@ -398,7 +398,7 @@ def _oiio_pixels(path):
     ],
 )
 def test_plain_exr_reads_as_oiio_does(tmp_path, monkeypatch, names, pixel_type):
-    import envconv.imagefile as imagefile_module
+    import envconv.file_io as file_io_module
 
     rng = np.random.default_rng(4)
     pixels = (rng.standard_normal((12, 24, len(names))) * 100).astype(np.float32)
@@ -406,9 +406,9 @@ def test_plain_exr_reads_as_oiio_does(tmp_path, monkeypatch, names, pixel_type):
     path = tmp_path / "plain.exr"
     _oiio_exr(path, pixels, names, pixel_type)
     decoded = []
-    original = imagefile_module._read_exr_pixels
+    original = file_io_module._read_exr_pixels
     monkeypatch.setattr(
-        imagefile_module, "_read_exr_pixels", lambda *a: decoded.append(1) or original(*a)
+        file_io_module, "_read_exr_pixels", lambda *a: decoded.append(1) or original(*a)
     )
     got, channels, _, stored = read_image(path)
     assert decoded and stored == pixel_type

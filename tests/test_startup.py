@@ -17,7 +17,7 @@ import pytest
 from conftest import write_plain
 
 import envconv
-import envconv.imagefile as imagefile
+import envconv.file_io as file_io
 
 ENVCONV = os.path.join(os.path.dirname(sys.executable), "envconv")
 
@@ -32,37 +32,37 @@ def _image(path, seed, shape=(16, 32, 3)):
 def decodes(monkeypatch):
     """Every decode of a file, with the name of the thread that ran it."""
     calls = []
-    original = imagefile._decode
+    original = file_io._decode
 
     def counting(path, level, threads=None):
         calls.append((os.path.basename(path), threading.current_thread().name))
         return original(path, level, threads)
 
-    monkeypatch.setattr(imagefile, "_decode", counting)
+    monkeypatch.setattr(file_io, "_decode", counting)
     yield calls
-    imagefile._ahead.clear()
+    file_io._ahead.clear()
 
 
 def test_read_ahead_decodes_once_on_its_thread_and_gives_the_same_pixels(tmp_path, decodes):
     pixels = _image(tmp_path / "a.exr", 1)
-    assert imagefile.read_ahead(tmp_path / "a.exr")
-    got, channels, _, pixel_type = imagefile.read_image(tmp_path / "a.exr")
+    assert file_io.read_ahead(tmp_path / "a.exr")
+    got, channels, _, pixel_type = file_io.read_image(tmp_path / "a.exr")
     np.testing.assert_array_equal(got, pixels)
     assert channels == ("R", "G", "B") and pixel_type == "float"
     assert decodes == [("a.exr", "envconv-read-ahead")]
     # The slot is emptied: the next read decodes again, on the caller's thread.
-    imagefile.read_image(tmp_path / "a.exr")
+    file_io.read_image(tmp_path / "a.exr")
     assert decodes[1] == ("a.exr", threading.current_thread().name)
 
 
 def test_read_ahead_of_a_file_rewritten_since_is_not_used(tmp_path, decodes):
     path = tmp_path / "a.exr"
     _image(path, 1)
-    assert imagefile.read_ahead(path)
-    imagefile._ahead["thread"].join()
+    assert file_io.read_ahead(path)
+    file_io._ahead["thread"].join()
     newer = _image(path, 2)  # same size on disk, new content and modification time
     os.utime(path, ns=(os.stat(path).st_atime_ns, os.stat(path).st_mtime_ns + 10**9))
-    got = imagefile.read_image(path)[0]
+    got = file_io.read_image(path)[0]
     np.testing.assert_array_equal(got, newer)
     assert len(decodes) == 2
 
@@ -70,8 +70,8 @@ def test_read_ahead_of_a_file_rewritten_since_is_not_used(tmp_path, decodes):
 def test_read_ahead_of_another_file_is_not_used(tmp_path, decodes):
     _image(tmp_path / "a.exr", 1)
     b = _image(tmp_path / "b.exr", 2)
-    assert imagefile.read_ahead(tmp_path / "a.exr")
-    np.testing.assert_array_equal(imagefile.read_image(tmp_path / "b.exr")[0], b)
+    assert file_io.read_ahead(tmp_path / "a.exr")
+    np.testing.assert_array_equal(file_io.read_image(tmp_path / "b.exr")[0], b)
     assert [name for name, _ in decodes] == ["a.exr", "b.exr"]
 
 
@@ -80,17 +80,17 @@ def test_read_ahead_of_a_damaged_file_reports_as_a_plain_read_does(tmp_path, dec
     _image(path, 1)
     path.write_bytes(path.read_bytes()[:200])  # a truncated file
     with pytest.raises(envconv.ImageIOError) as plain:
-        imagefile.read_image(path)
-    assert imagefile.read_ahead(path)
+        file_io.read_image(path)
+    assert file_io.read_ahead(path)
     with pytest.raises(envconv.ImageIOError) as ahead:
-        imagefile.read_image(path)
+        file_io.read_image(path)
     assert str(ahead.value) == str(plain.value)
 
 
 def test_read_ahead_skips_what_is_not_a_regular_file(tmp_path):
-    assert not imagefile.read_ahead(tmp_path / "missing.exr")
-    assert not imagefile.read_ahead(tmp_path)
-    assert not imagefile._ahead
+    assert not file_io.read_ahead(tmp_path / "missing.exr")
+    assert not file_io.read_ahead(tmp_path)
+    assert not file_io._ahead
 
 
 def test_cli_reads_ahead_the_input_it_guesses(tmp_path, monkeypatch):
@@ -102,12 +102,12 @@ def test_cli_reads_ahead_the_input_it_guesses(tmp_path, monkeypatch):
     started = []
 
     def read_ahead(path):
-        regular = os.path.isfile(path)  # as imagefile.read_ahead decides
+        regular = os.path.isfile(path)  # as file_io.read_ahead decides
         if regular:
             started.append(path)
         return regular
 
-    monkeypatch.setattr(imagefile, "read_ahead", read_ahead)
+    monkeypatch.setattr(file_io, "read_ahead", read_ahead)
     _image(tmp_path / "in.exr", 1)
     (tmp_path / "latlong").write_text("not an image")
     inp, out = str(tmp_path / "in.exr"), str(tmp_path / "out.exr")
@@ -137,7 +137,7 @@ def test_importing_the_command_line_loads_neither_numba_nor_the_layouts():
     """The entry point stays light until a command needs the kernels, so that the read-ahead
     starts before numba is imported."""
     out = _run_python(
-        "import sys, envconv, envconv.cli, envconv.imagefile\n"
+        "import sys, envconv, envconv.cli, envconv.file_io\n"
         "print(sorted(m for m in ('numba', 'envconv.layouts', 'envconv.resample') if m in sys.modules))"
     )
     assert out.strip() == "[]"

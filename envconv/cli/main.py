@@ -198,7 +198,7 @@ READS_INPUT = ("convert", "info", "read")
 
 
 def _read_ahead_input(args: list[str]) -> None:
-    """Start decoding a one-shot command's input on a helper thread (see envconv.imagefile).
+    """Start decoding a one-shot command's input on a helper thread (see envconv.file_io).
 
     Importing numba and the layouts takes about 0.2 s on one core, and the image libraries
     decode without holding the GIL, so the decode runs meanwhile on another. Click has not
@@ -208,7 +208,7 @@ def _read_ahead_input(args: list[str]) -> None:
     """
     if not args or args[0] not in READS_INPUT or {"--dry-run", "--help", "-h"} & set(args):
         return
-    from ..imagefile import FORMATS, read_ahead
+    from ..file_io import FORMATS, read_ahead
 
     for arg in args[1:]:
         if not arg.startswith("-") and os.path.splitext(arg)[1].lower() in FORMATS:
@@ -241,8 +241,8 @@ def _finish(code: int) -> None:
     shutdown = getattr(threading, "_shutdown", None)
     run_exit_handlers = getattr(atexit, "_run_exitfuncs", None)
     if os.environ.get("ENVCONV_FULL_EXIT") or shutdown is None or run_exit_handlers is None:
-        if "envconv.imagefile" in sys.modules:  # a read-ahead is a daemon thread
-            sys.modules["envconv.imagefile"].join_read_ahead()
+        if "envconv.file_io" in sys.modules:  # a read-ahead is a daemon thread
+            sys.modules["envconv.file_io"].join_read_ahead()
         sys.exit(code)
     shutdown()
     run_exit_handlers()
