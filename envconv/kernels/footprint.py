@@ -14,7 +14,7 @@ from .mapping import output_sample, source_point
 
 __all__ = [
     "AUTO_SPACING", "AUTO_SLACK", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES", "RIP_MIN_SPAN",
-    "auto_count", "pixel_footprint", "rip_level", "level_span",
+    "auto_count", "pixel_footprint", "rip_level", "level_span", "edge_y_part", "centre_source_y",
 ]  # fmt: skip
 
 
@@ -65,6 +65,27 @@ def level_span(span, x_part, level):
         return span
     shrink = 1.0 / (1 << level)
     return math.sqrt(max(span * span - x_part * x_part * (1.0 - shrink * shrink), 0.0))
+
+
+@jit_inline
+def edge_y_part(span, x_part):
+    """Source-y component of an edge ``span`` texels long whose x component is ``x_part``."""
+    return math.sqrt(max(span * span - x_part * x_part, 0.0))
+
+
+@jit_inline
+def centre_source_y(
+    sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam,
+    i, j, scale_x, scale_y, rot, fill,
+):  # fmt: skip
+    """Source row position of output pixel (i, j)'s centre (the middle row if it has none)."""
+    face, a, b, readable, valid = output_sample(
+        dgeo, d_cell_face, d_cell_turns, (i + 0.5) * scale_x, (j + 0.5) * scale_y, fill
+    )
+    if not readable:
+        return 0.5 * sgeo[1]
+    sx, sy, cell = source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
+    return sy
 
 
 @jit_inline

@@ -23,6 +23,8 @@ from .cells import GEO_FAMILY, cell_local
 from .footprint import (
     AUTO_EDGE_SAMPLES,
     auto_count,
+    centre_source_y,
+    edge_y_part,
     level_span,
     pixel_footprint,
     rip_level,
@@ -30,7 +32,7 @@ from .footprint import (
 from .geometry import density, is_disk
 from .mapping import output_sample as _output_sample
 from .mapping import source_point
-from .ripmap import level_tap, rip_offset
+from .ripmap import level_tap, rip_offset, rows_filled
 from .taps import accumulate_sample
 from .tiles import (
     MIN_SUBTILE,
@@ -43,42 +45,6 @@ from .tiles import (
 )
 
 __all__ = ["resample_rows"]
-
-
-# Rows beyond a footprint's reach that a rip-map read may touch: the bilinear tap's second row,
-# the continuation over a pole, and the slack of interpolated tiles.
-RIP_ROW_MARGIN = 3.0
-
-
-@jit_inline
-def _rows_built(y, extent, rip_rows, height):
-    """Whether sub-samples within ``extent`` source rows of row position ``y`` stay in the
-    rip-map rows that were filled: the ``rip_rows`` next to each pole."""
-    if 2 * rip_rows >= height:
-        return True
-    reach = extent + RIP_ROW_MARGIN
-    return y + reach <= rip_rows or y - reach >= height - rip_rows
-
-
-@jit_inline
-def _y_part(span, x_part):
-    """Source-y component of an edge ``span`` texels long whose x component is ``x_part``."""
-    return math.sqrt(max(span * span - x_part * x_part, 0.0))
-
-
-@jit_inline
-def _centre_source_y(
-    sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face, d_cell_turns, dfam,
-    i, j, scale_x, scale_y, rot, fill,
-):  # fmt: skip
-    """Source row position of output pixel (i, j)'s centre (the middle row if it has none)."""
-    face, a, b, readable, valid = _output_sample(
-        dgeo, d_cell_face, d_cell_turns, (i + 0.5) * scale_x, (j + 0.5) * scale_y, fill
-    )
-    if not readable:
-        return 0.5 * sgeo[1]
-    sx, sy, cell = source_point(sgeo, s_face_cell, s_cell_turns, dfam, face, a, b, rot)
-    return sy
 
 
 @jit_inline
@@ -253,12 +219,12 @@ def resample_rows(
                             )  # fmt: skip
                                 if rip_levels > 0 and x_of_x >= 0.0:
                                     level = rip_level(x_of_x + x_of_y, rip_levels)
-                                    if level > 0 and not _rows_built(
-                                        _centre_source_y(
+                                    if level > 0 and not rows_filled(
+                                        centre_source_y(
                                             sgeo, s_face_cell, s_cell_turns, dgeo, d_cell_face,
                                             d_cell_turns, dfam, i, j, scale_x, scale_y, rot, fill,
                                         ),
-                                        _y_part(span_x, x_of_x) + _y_part(span_y, x_of_y),
+                                        edge_y_part(span_x, x_of_x) + edge_y_part(span_y, x_of_y),
                                         rip_rows, s_height,
                                     ):  # fmt: skip
                                         level = 0
@@ -309,7 +275,7 @@ def resample_rows(
                                 for m in range(3):
                                     y_lo = min(y_lo, grid[k, m, 1])
                                     y_hi = max(y_hi, grid[k, m, 1])
-                            if not _rows_built(0.5 * (y_lo + y_hi), y_hi - y_lo, rip_rows, s_height):
+                            if not rows_filled(0.5 * (y_lo + y_hi), y_hi - y_lo, rip_rows, s_height):
                                 level = 0
                     shrink = 1.0 / (1 << level)
                     edge_x = 0.0

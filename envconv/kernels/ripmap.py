@@ -29,7 +29,8 @@ from numba import prange
 
 from .._jit import jit_inline, jit_parallel
 
-__all__ = ["rip_level_count", "rip_offset", "build_rips", "level_tap", "RIP_MAX_LEVELS"]
+__all__ = ["rip_level_count", "rip_offset", "build_rips", "level_tap", "rows_filled",
+           "RIP_MAX_LEVELS", "RIP_ROW_MARGIN"]  # fmt: skip
 
 RIP_MAX_LEVELS = 8
 RIP_MIN_WIDTH = 8
@@ -92,6 +93,21 @@ def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None 
         out = np.empty((height, width - (width >> levels), nch), np.float32)
     _fill_rips(src, levels, height if rows is None else int(rows), out)
     return out, levels
+
+
+# Rows beyond a footprint's reach that a rip-map read may touch: the bilinear tap's second row,
+# the continuation over a pole, and the slack of interpolated tiles.
+RIP_ROW_MARGIN = 3.0
+
+
+@jit_inline
+def rows_filled(y, extent, rows, height):
+    """Whether sub-samples within ``extent`` source rows of row position ``y`` stay in the
+    rip-map rows that :func:`build_rips` filled: the ``rows`` next to each pole."""
+    if 2 * rows >= height:
+        return True
+    reach = extent + RIP_ROW_MARGIN
+    return y + reach <= rows or y - reach >= height - rows
 
 
 @jit_inline
