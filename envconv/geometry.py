@@ -105,19 +105,25 @@ def pixel_solid_angles(layout, size: int, guard: int = 0, samples: int = 4) -> n
     return out
 
 
+def pixel_pitch(layout, dirs: np.ndarray) -> np.ndarray:
+    """Angular pixel pitch (radians × N: √Ω of a pixel, for a layout of size N = 1) at each of
+    the unit directions ``dirs`` (K, 3)."""
+    from .kernels.mapping import dir_density
+
+    layout = get_layout(layout)
+    geo, _, _, _ = kernel_geometry(layout, 64, 0)
+    dens = np.zeros(dirs.shape[0])
+    dir_density(geo, np.ascontiguousarray(dirs, np.float64), dens)
+    # A pixel spans 2/(aspect N) × 2/N in (a, b).
+    return np.sqrt(dens * 4.0 / layout.aspect)
+
+
 def horizon_pitch(layout) -> float:
     """Mean angular pixel pitch (radians × N) along the horizon, for a layout of size N = 1.
 
     The pitch at a direction is √Ω of a pixel there. Averaged over 360 horizon directions, it
     is k in ``pitch = k / N``: π for lat-long, about 1.68 for cube faces.
     """
-    from .kernels.mapping import dir_density
-
-    layout = get_layout(layout)
     phi = (np.arange(360) + 0.5) * (2 * math.pi / 360)
-    dirs = np.ascontiguousarray(np.stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)], -1))
-    geo, _, _, _ = kernel_geometry(layout, 64, 0)
-    dens = np.zeros(dirs.shape[0])
-    dir_density(geo, dirs, dens)
-    # A pixel spans 2/(aspect N) × 2/N in (a, b).
-    return float(np.mean(np.sqrt(dens * 4.0 / layout.aspect)))
+    dirs = np.stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)], -1)
+    return float(np.mean(pixel_pitch(layout, dirs)))

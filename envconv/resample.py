@@ -46,7 +46,7 @@ import numpy as np
 from .conventions import apply_remap, environment_axes, resolve_convention
 from .envmap import EnvMap
 from .errors import LayoutError, UsageError
-from .geometry import horizon_pitch, kernel_geometry
+from .geometry import horizon_pitch, kernel_geometry, pixel_pitch
 from .layouts import Layout, get_layout
 from .rotation import parse_rotation, rotation_matrix
 
@@ -292,20 +292,14 @@ def rip_rows(width: int, height: int, to: Layout | str, size: int) -> int:
     Layouts with a singular rim (a mirror ball) fill every row.
     """
     from .kernels.footprint import RIP_MIN_SPAN
-    from .kernels.mapping import dir_density
 
-    layout = get_layout(to)
-    count = 4096
+    count = 4096  # Fibonacci directions, evenly spread over the sphere
     k = np.arange(count) + 0.5
     polar = np.arccos(1.0 - 2.0 * k / count)
     azimuth = math.pi * (1.0 + 5.0**0.5) * k
     dirs = np.stack([np.sin(polar) * np.sin(azimuth), np.cos(polar),
                      np.sin(polar) * np.cos(azimuth)], -1)  # fmt: skip
-    geo, _, _, _ = kernel_geometry(layout, 64, 0)
-    density = np.zeros(count)
-    dir_density(geo, np.ascontiguousarray(dirs), density)
-    # A pixel spans 2/(aspect N) × 2/N in (a, b) (see geometry.horizon_pitch).
-    pitch = _ANISOTROPY * float(np.sqrt(np.max(density) * 4.0 / layout.aspect)) / size
+    pitch = _ANISOTROPY * float(np.max(pixel_pitch(to, dirs))) / size
     cos_limit = width * 2.0 * pitch / (2.0 * math.pi * 2.0 * RIP_MIN_SPAN)
     if not np.isfinite(pitch) or cos_limit >= 1.0:
         return height
