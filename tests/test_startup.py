@@ -153,8 +153,9 @@ def test_lazy_package_attributes_resolve_and_unknown_names_fail():
 
 def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries(tmp_path):
     """numba's cache loader would import and install all of its typing and lowering registries
-    (numba.np.linalg among them) first; envconv's dispatchers skip that. The pixels a fresh
-    process computes from the cache must equal this process's, bit for bit, for the main
+    (numba.np.linalg among them) first; envconv's dispatchers skip that. Nor may a kernel make
+    arrays itself, which would make loading it import numba.np.arrayobj (0.05 s). The pixels a
+    fresh process computes from the cache must equal this process's, bit for bit, for the main
     kernels: resampling (parallel), the rip-map and a mip chain."""
     import analytic
     import naive
@@ -175,9 +176,9 @@ def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries
         "    r = envconv.convert(source, **kwargs)\n"
         "    levels = r.levels if kwargs.get('mips') else [r.pixels]\n"
         f"    np.savez({str(tmp_path)!r} + '/' + name + '.npz', *levels)\n"
-        "print('numba.np.linalg' in sys.modules)\n"
+        "print('numba.np.linalg' in sys.modules, 'numba.np.arrayobj' in sys.modules)\n"
     )
-    assert _run_python(code).strip() == "False"
+    assert _run_python(code).strip() == "False False"
     for name, levels in expected.items():
         with np.load(tmp_path / f"{name}.npz") as saved:
             assert len(saved.files) == len(levels)

@@ -10,8 +10,9 @@ may interpolate weights over different tiles: to the kernel's WEIGHT_TOLERANCE).
 same image area.
 """
 
+import numba
 import numpy as np
-from numba import prange
+from numba import get_thread_id, prange
 
 from .._jit import jit_parallel
 from .resample import _store
@@ -19,13 +20,21 @@ from .resample import _store
 __all__ = ["reduce_blocks"]
 
 
-@jit_parallel
 def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout):
-    """Weighted means of bx × by blocks: out (h, w, C), weight sums wout, mean coverage aout."""
+    """Weighted means of bx × by blocks: out (h, w, C), weight sums wout, mean coverage aout.
+
+    The per-thread accumulators are made here, not in the kernel (see
+    :func:`envconv.kernels.resample.band_scratch`)."""
+    acc_all = np.zeros((numba.config.NUMBA_NUM_THREADS, out.shape[2]), np.float64)
+    _reduce_rows(src, wsrc, asrc, bx, by, out, wout, aout, acc_all)
+
+
+@jit_parallel
+def _reduce_rows(src, wsrc, asrc, bx, by, out, wout, aout, acc_all):
     height, width, nch = out.shape
     inv_area = 1.0 / (bx * by)
     for j in prange(height):
-        acc = np.zeros(nch, np.float64)
+        acc = acc_all[get_thread_id()]
         for i in range(width):
             for c in range(nch):
                 acc[c] = 0.0
