@@ -98,6 +98,27 @@ def test_count_nonfinite():
     assert depth.count_nonfinite(px) == (2, 2)
 
 
+@pytest.mark.parametrize(
+    "values, expected",
+    [
+        ([3e38, 3e38, 3e38, 1.0], (0, 0)),  # finite values whose float32 sum overflows
+        ([np.inf, -np.inf, 1.0, 2.0], (0, 2)),  # Infs whose sum is NaN
+        ([np.inf, 1.0, 2.0, 3.0], (0, 1)),
+        ([1.0, 2.0, np.nan, 4.0], (1, 0)),
+        ([0.0, -1e-30, 65504.0, 1e30], (0, 0)),
+    ],
+)
+def test_count_nonfinite_single_values_and_overflow(values, expected):
+    """The one-pass check must neither miss a lone NaN or Inf nor count an overflowing sum."""
+    big = np.ones((64, 64, 3), np.float32)
+    big.reshape(-1)[[5, 999, 4000, 12000]] = values
+    assert depth.count_nonfinite(big) == expected
+    with np.errstate(over="ignore"):
+        half = big.astype(np.float16)  # 3e38 becomes Inf
+    assert depth.count_nonfinite(half) == (int(np.isnan(half).sum()), int(np.isinf(half).sum()))
+    assert depth.count_nonfinite(np.ones((4, 4, 3), np.uint8)) == (0, 0)
+
+
 def test_fix_nonfinite_box3_hand_computed():
     px = np.array([[1, 2, 3, 4], [5, np.nan, 7, 8], [9, 10, 11, np.inf]], np.float32)[..., None]
     px = np.concatenate([px, np.ones_like(px)], axis=2)
