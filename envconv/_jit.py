@@ -14,7 +14,15 @@ code needs. envconv's own dispatchers load from the cache after starting numba's
 (NRT) alone, which is what the code calls into; the parallel thread pool is started by the
 cached code's own reload hook as usual. A cache miss compiles as usual, and numba's compiler
 then refreshes itself. Dispatchers of other packages are not touched.
+
+Starting NRT compiles its few LLVM functions (atomic reference counts) afresh in every process:
+0.02 s. envconv keeps their machine code next to its kernels' cache, keyed like numba's own
+entries by numba's version and the host CPU (:func:`_start_runtime`).
 """
+
+import hashlib
+import os
+import pickle
 
 import numba
 
@@ -35,16 +43,63 @@ def _load_cached_without_refresh(dispatcher):
     guard = getattr(cache, "_guard_against_spurious_io_errors", None)
     if load is None or guard is None:
         return dispatcher
-    from numba.core.runtime import rtsys
 
     def load_overload(sig, target_context):
-        rtsys.initialize(target_context)  # the runtime the code calls into (runs once)
+        _start_runtime(target_context, getattr(cache, "_cache_path", None))
         with guard():
             return load(sig, target_context)
         return None  # the guard swallowed a spurious I/O error: compile instead
 
     cache.load_overload = load_overload
     return dispatcher
+
+
+def _start_runtime(target_context, cache_dir) -> None:
+    """Start numba's runtime (once per process), its LLVM functions loaded from ``cache_dir``.
+
+    The first process compiles them as numba does and saves their machine code there; later
+    ones load it. A file that cannot be read, written or loaded just means compiling again.
+    """
+    from numba.core.runtime import nrtdynmod, rtsys
+
+    if rtsys._init or cache_dir is None:
+        rtsys.initialize(target_context)
+        return
+    compile_nrt = nrtdynmod.compile_nrt_functions
+
+    def load_or_compile(ctx):
+        codegen = ctx.codegen()
+        key = repr((numba.__version__, codegen.magic_tuple())).encode()
+        path = os.path.join(cache_dir, f"nrt-{hashlib.sha256(key).hexdigest()[:16]}.nbo")
+        try:
+            with open(path, "rb") as f:
+                return codegen.unserialize_library(pickle.load(f))
+        except Exception:  # absent, unreadable or stale: compile
+            pass
+        create = getattr(nrtdynmod, "create_nrt_module", None)
+        if create is None:
+            return compile_nrt(ctx)
+        ir_module, library = create(ctx)  # what compile_nrt does, keeping the machine code
+        library.enable_object_caching()
+        library.add_ir_module(ir_module)
+        library.finalize()
+        temporary = f"{path}.{os.getpid()}.tmp"
+        try:
+            state = pickle.dumps(library.serialize_using_object_code())
+            os.makedirs(cache_dir, exist_ok=True)
+            with open(temporary, "wb") as f:
+                f.write(state)
+            os.replace(temporary, path)
+        except Exception:  # a read-only install: compile in every process
+            if os.path.exists(temporary):
+                os.remove(temporary)
+        return library
+
+    nrtdynmod.compile_nrt_functions = load_or_compile
+    try:
+        rtsys.initialize(target_context)
+    finally:
+        nrtdynmod.compile_nrt_functions = compile_nrt
 
 
 def jit(fn):

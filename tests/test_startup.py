@@ -11,6 +11,7 @@ import os
 import subprocess
 import sys
 import threading
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -184,6 +185,42 @@ def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries
             assert len(saved.files) == len(levels)
             for k, level in enumerate(levels):
                 np.testing.assert_array_equal(saved[f"arr_{k}"], level, err_msg=name)
+
+
+def test_numbas_runtime_functions_load_from_envconvs_cache_and_a_bad_file_is_replaced(tmp_path):
+    """NRT's LLVM functions are compiled once and their machine code kept beside the kernels'
+    cache. A fresh process must load them (compiling is made to fail) and give the same pixels;
+    a damaged file must be compiled again and rewritten, never break a conversion."""
+    import pickle
+
+    from envconv.kernels.resample import _resample_bands
+
+    source = envconv.EnvMap(np.random.default_rng(3).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
+    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
+    expected = envconv.convert(envconv.read(tmp_path / "src.exr"), "cube-vcross", size=16).pixels
+    convert = (
+        "import numpy as np, envconv\n"
+        f"r = envconv.convert(envconv.read({str(tmp_path / 'src.exr')!r}), 'cube-vcross', size=16)\n"
+        f"np.save({str(tmp_path / 'out.npy')!r}, r.pixels)\n"
+    )
+    cache_dir = _resample_bands._cache._cache_path
+    saved = sorted(f for f in os.listdir(cache_dir) if f.startswith("nrt-") and f.endswith(".nbo"))
+    assert saved, "the first kernel load of this process should have saved NRT's machine code"
+    for name in saved:
+        (Path(cache_dir) / name).write_bytes(b"damaged")
+    _run_python(convert)
+    np.testing.assert_array_equal(np.load(tmp_path / "out.npy"), expected)
+    for name in saved:
+        assert pickle.loads((Path(cache_dir) / name).read_bytes())[1] == "object"
+    no_compiling = (
+        "from numba.core.runtime import nrtdynmod\n"
+        "def refuse(*args):\n"
+        "    raise AssertionError('NRT compiled although its machine code was cached')\n"
+        "nrtdynmod.compile_nrt_functions = nrtdynmod.create_nrt_module = refuse\n"
+    )
+    _run_python(no_compiling + convert)
+    np.testing.assert_array_equal(np.load(tmp_path / "out.npy"), expected)
+    assert not [f for f in os.listdir(cache_dir) if f.endswith(".tmp")]
 
 
 @pytest.mark.parametrize("full_exit", ["", "1"])
