@@ -155,7 +155,8 @@ def test_lazy_package_attributes_resolve_and_unknown_names_fail():
 def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries(tmp_path):
     """numba's cache loader would import and install all of its typing and lowering registries
     (numba.np.linalg among them) first; envconv's dispatchers skip that. Nor may a kernel make
-    arrays itself, which would make loading it import numba.np.arrayobj (0.05 s). The pixels a
+    arrays itself, which would make loading it import numba.np.arrayobj (0.05 s), nor typing a
+    plain ndarray argument import numpy.ma (numba's MaskedArray check, 0.013 s). The pixels a
     fresh process computes from the cache must equal this process's, bit for bit, for the main
     kernels: resampling (parallel), the rip-map and a mip chain."""
     import analytic
@@ -177,14 +178,34 @@ def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries
         "    r = envconv.convert(source, **kwargs)\n"
         "    levels = r.levels if kwargs.get('mips') else [r.pixels]\n"
         f"    np.savez({str(tmp_path)!r} + '/' + name + '.npz', *levels)\n"
-        "print('numba.np.linalg' in sys.modules, 'numba.np.arrayobj' in sys.modules)\n"
+        "print([m for m in ('numba.np.linalg', 'numba.np.arrayobj', 'numpy.ma') if m in sys.modules])\n"
     )
-    assert _run_python(code).strip() == "False False"
+    assert _run_python(code).strip() == "[]"
     for name, levels in expected.items():
         with np.load(tmp_path / f"{name}.npz") as saved:
             assert len(saved.files) == len(levels)
             for k, level in enumerate(levels):
                 np.testing.assert_array_equal(saved[f"arr_{k}"], level, err_msg=name)
+
+
+def test_envconv_dispatchers_type_plain_arrays_as_numba_does():
+    """The typing that skips numba's MaskedArray check must give numba's own answer for every
+    layout, dtype, dimension and write flag, and leave anything else to numba."""
+    from numba.core.typing.typeof import Purpose, typeof
+
+    from envconv.kernels.ripmap import _fill_rips
+
+    base = np.arange(2 * 3 * 4 * 5, dtype=np.float64).reshape(2, 3, 4, 5)
+    readonly = np.ones((3, 4), np.float32)
+    readonly.flags.writeable = False
+    values = [base, base[:, ::2], np.asfortranarray(base), base[..., 0], base.astype(np.float32),
+              base.astype(np.int64), base > 3, np.float32(2.0).reshape(()), readonly,
+              np.empty((0, 3), np.uint16), np.zeros(5, np.complex64), 3, 2.5, (1, 2.0)]  # fmt: skip
+    for value in values:
+        assert _fill_rips.typeof_pyval(value) == typeof(value, Purpose.argument), repr(value)
+    masked = np.ma.masked_array(np.zeros(3))  # numba refuses it, and so must envconv
+    with pytest.raises(Exception, match="MaskedArray"):
+        _fill_rips.typeof_pyval(masked)
 
 
 def test_numbas_runtime_functions_load_from_envconvs_cache_and_a_bad_file_is_replaced(tmp_path):
