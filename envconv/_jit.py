@@ -24,6 +24,7 @@ Starting NRT compiles its few LLVM functions (atomic reference counts) afresh in
 entries by numba's version and the host CPU (:func:`_start_runtime`).
 """
 
+import contextlib
 import hashlib
 import os
 import pickle
@@ -50,12 +51,76 @@ def _load_cached_without_refresh(dispatcher):
 
     def load_overload(sig, target_context):
         _start_runtime(target_context, getattr(cache, "_cache_path", None))
-        with guard():
+        with guard(), _linking_bitcode_on_demand():
             return load(sig, target_context)
         return None  # the guard swallowed a spurious I/O error: compile instead
 
     cache.load_overload = load_overload
     return _type_plain_arrays(dispatcher)
+
+
+@contextlib.contextmanager
+def _linking_bitcode_on_demand():
+    """Within: a library loaded from cached machine code parses its linking bitcode when first
+    linked into a compilation, not at load.
+
+    numba keeps, beside a cached library's machine code, its LLVM bitcode for linking into
+    other libraries being compiled, and parses it and records its symbols at every load: 0.035 s
+    for the resampling kernel, which is called, never linked. Only an uncached compilation that
+    calls a loaded function links it (numba's ``_get_module_for_linking``). Any other kind of
+    library, or a numba without these internals, loads as numba does.
+    """
+    from numba.core import codegen
+
+    library_class = getattr(codegen, "CPUCodeLibrary", None)
+    original = getattr(library_class, "_unserialize", None)
+    needed = ("create_library", "_engine")
+    if original is None or not hasattr(library_class, "_get_module_for_linking"):
+        yield
+        return
+
+    def unserialize(cls, codegen_, state):
+        name, kind, data = state
+        if kind != "object" or not all(hasattr(codegen_, n) for n in needed):
+            return original.__func__(cls, codegen_, state)
+        object_code, linking_bitcode = data
+        library = codegen_.create_library(name)
+        library.enable_object_caching()
+        library._set_compiled_object(object_code)
+        library._finalize_final_module()
+        engine = codegen_._engine
+        for_linking = library._get_module_for_linking
+        pointer_to_function = library.get_pointer_to_function
+
+        def parse_for_linking():
+            if library._shared_module is None:  # what numba's load does, done now
+                from llvmlite import binding
+
+                library._shared_module = binding.parse_bitcode(linking_bitcode)
+                engine._load_defined_symbols(library._shared_module)
+
+        def get_module_for_linking():
+            parse_for_linking()
+            return for_linking()
+
+        def get_pointer_to_function(name):
+            # numba first checks the name against the symbols recorded from the bitcode; the
+            # machine code answers that itself (0: not there, then numba's own way).
+            address = engine.get_function_address(name)
+            if address:
+                return address
+            parse_for_linking()
+            return pointer_to_function(name)
+
+        library.get_pointer_to_function = get_pointer_to_function
+        library._get_module_for_linking = get_module_for_linking
+        return library
+
+    library_class._unserialize = classmethod(unserialize)
+    try:
+        yield
+    finally:
+        library_class._unserialize = original
 
 
 def _type_plain_arrays(dispatcher):

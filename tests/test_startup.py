@@ -188,6 +188,28 @@ def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries
                 np.testing.assert_array_equal(saved[f"arr_{k}"], level, err_msg=name)
 
 
+def test_a_function_loaded_from_the_cache_still_links_into_a_new_compilation():
+    """A cached library's linking bitcode is parsed only when something links it. A fresh
+    process loads a helper from the cache, calls it, then compiles a new function that calls
+    it: both must give this process's value, and the helper must have come from the cache."""
+    from envconv.kernels.geometry import FAMILY_CUBE_GL, density
+
+    expected = density(FAMILY_CUBE_GL, 2, 0.25, -0.5)  # compiles (or loads) and caches it
+    out = _run_python(
+        "import numba\n"
+        "from envconv.kernels.geometry import FAMILY_CUBE_GL, density\n"
+        "loaded = density(FAMILY_CUBE_GL, 2, 0.25, -0.5)\n"
+        "hits = sum(density._cache_hits.values())\n"
+        "@numba.njit\n"
+        "def twice(a, b):\n"
+        "    return 2.0 * density(FAMILY_CUBE_GL, 2, a, b)\n"
+        "print(repr(loaded), repr(twice(0.25, -0.5)), hits)\n"
+    )
+    loaded, linked, hits = out.split()
+    assert float(loaded) == expected and float(linked) == 2.0 * expected
+    assert int(hits) == 1
+
+
 def test_envconv_dispatchers_type_plain_arrays_as_numba_does():
     """The typing that skips numba's MaskedArray check must give numba's own answer for every
     layout, dtype, dimension and write flag, and leave anything else to numba."""
