@@ -155,7 +155,8 @@ def test_lazy_package_attributes_resolve_and_unknown_names_fail():
 def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries(tmp_path):
     """numba's cache loader would import and install all of its typing and lowering registries
     (numba.np.linalg among them) first; envconv's dispatchers skip that. Nor may a kernel make
-    arrays itself, which would make loading it import numba.np.arrayobj (0.05 s), nor typing a
+    arrays with np.empty or np.zeros (envconv.kernels.scratch instead), which would make loading
+    it import numba.np.arrayobj (0.05 s), nor typing a
     plain ndarray argument import numpy.ma (numba's MaskedArray check, 0.013 s). The pixels a
     fresh process computes from the cache must equal this process's, bit for bit, for the main
     kernels: resampling (parallel), the rip-map and a mip chain."""
@@ -236,7 +237,7 @@ def test_numbas_runtime_functions_load_from_envconvs_cache_and_a_bad_file_is_rep
     a damaged file must be compiled again and rewritten, never break a conversion."""
     import pickle
 
-    from envconv.kernels.resample import _resample_bands
+    from envconv.kernels.resample import resample_rows
 
     source = envconv.EnvMap(np.random.default_rng(3).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
     envconv.write(source, tmp_path / "src.exr", bit_depth="float")
@@ -246,7 +247,7 @@ def test_numbas_runtime_functions_load_from_envconvs_cache_and_a_bad_file_is_rep
         f"r = envconv.convert(envconv.read({str(tmp_path / 'src.exr')!r}), 'cube-vcross', size=16)\n"
         f"np.save({str(tmp_path / 'out.npy')!r}, r.pixels)\n"
     )
-    cache_dir = _resample_bands._cache._cache_path
+    cache_dir = resample_rows._cache._cache_path
     saved = sorted(f for f in os.listdir(cache_dir) if f.startswith("nrt-") and f.endswith(".nbo"))
     assert saved, "the first kernel load of this process should have saved NRT's machine code"
     for name in saved:

@@ -10,31 +10,23 @@ may interpolate weights over different tiles: to the kernel's WEIGHT_TOLERANCE).
 same image area.
 """
 
-import numba
 import numpy as np
-from numba import get_thread_id, prange
+from numba import prange
 
 from .._jit import jit_parallel
 from .resample import _store
+from .scratch import scratch
 
 __all__ = ["reduce_blocks"]
 
 
-def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout):
-    """Weighted means of bx × by blocks: out (h, w, C), weight sums wout, mean coverage aout.
-
-    The per-thread accumulators are made here, not in the kernel (see
-    :func:`envconv.kernels.resample.band_scratch`)."""
-    acc_all = np.zeros((numba.config.NUMBA_NUM_THREADS, out.shape[2]), np.float64)
-    _reduce_rows(src, wsrc, asrc, bx, by, out, wout, aout, acc_all)
-
-
 @jit_parallel
-def _reduce_rows(src, wsrc, asrc, bx, by, out, wout, aout, acc_all):
+def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout):
+    """Weighted means of bx × by blocks: out (h, w, C), weight sums wout, mean coverage aout."""
     height, width, nch = out.shape
     inv_area = 1.0 / (bx * by)
     for j in prange(height):
-        acc = acc_all[get_thread_id()]
+        acc = scratch(nch, np.float64)
         for i in range(width):
             for c in range(nch):
                 acc[c] = 0.0

@@ -15,9 +15,8 @@ Tiles are in :mod:`envconv.kernels.tiles`, the auto sub-sample rule in
 
 import math
 
-import numba
 import numpy as np
-from numba import get_thread_id, prange
+from numba import prange
 
 from .._jit import jit_inline, jit_parallel
 from .cells import GEO_FAMILY, cell_local
@@ -34,6 +33,7 @@ from .geometry import density, is_disk
 from .mapping import output_sample as _output_sample
 from .mapping import source_point
 from .ripmap import level_tap, rip_offset, rows_filled
+from .scratch import scratch
 from .taps import accumulate_sample
 from .tiles import (
     MIN_SUBTILE,
@@ -45,7 +45,7 @@ from .tiles import (
     tile_in_empty_cell,
 )
 
-__all__ = ["resample_rows", "band_scratch"]
+__all__ = ["resample_rows"]
 
 
 @jit_inline
@@ -93,6 +93,7 @@ def _exact_pixel(
 MAX_ROW_SAMPLES = 64
 
 
+@jit_parallel
 def resample_rows(
     src, rip, rip_levels, rip_rows, sgeo, s_cell_face, s_cell_turns, s_face_cell,
     dgeo, d_cell_face, d_cell_turns,
@@ -113,43 +114,6 @@ def resample_rows(
     and the bilinear filter. Work is split into bands of TILE output rows, one band per
     parallel task, so the working set is bounded by a few rows whatever the image size.
     """
-    _resample_bands(
-        src, rip, rip_levels, rip_rows, sgeo, s_cell_face, s_cell_turns, s_face_cell,
-        dgeo, d_cell_face, d_cell_turns,
-        scale_x, scale_y, samples, filt, rot, fill, out, alpha, weights,
-        *band_scratch(out.shape[2]),
-    )  # fmt: skip
-
-
-def band_scratch(nch: int):
-    """Per-thread working arrays of :func:`_resample_bands`, one row per numba thread.
-
-    They are made here rather than inside the kernel: array creation in jitted code makes
-    loading the cached kernel import numba's whole array implementation (0.05 s of a one-shot
-    convert). Each call gets its own, so concurrent calls never share them; within a call a
-    thread is one parallel task at a time and indexes them by ``numba.get_thread_id()``.
-    Returns (accumulator (T, C), filter taps (T, 3C), tile grid (T, 3, 3, 3), sub-sample rows
-    (T, TILE · MAX_ROW_SAMPLES, 9), tile stack (T, 16, 3) int64).
-    """
-    threads = numba.config.NUMBA_NUM_THREADS
-    return (
-        np.zeros((threads, nch), np.float64),
-        np.zeros((threads, 3 * nch), np.float64),
-        np.zeros((threads, 3, 3, 3), np.float64),
-        np.zeros((threads, TILE * MAX_ROW_SAMPLES, 9), np.float64),
-        np.zeros((threads, 16, 3), np.int64),
-    )
-
-
-@jit_parallel
-def _resample_bands(
-    src, rip, rip_levels, rip_rows, sgeo, s_cell_face, s_cell_turns, s_face_cell,
-    dgeo, d_cell_face, d_cell_turns,
-    scale_x, scale_y, samples, filt, rot, fill, out, alpha, weights,
-    acc_all, tmp_all, grid_all, rows_all, stack_all,
-):  # fmt: skip
-    """The kernel of :func:`resample_rows`, with the per-thread arrays of
-    :func:`band_scratch`."""
     height, width, nch = out.shape
     dfam = dgeo[GEO_FAMILY]
     sfam = sgeo[GEO_FAMILY]
@@ -183,14 +147,13 @@ def _resample_bands(
     keep_weights = weights.shape[0] == height and weights.shape[1] == width
     keep_alpha = alpha.shape[0] == height and alpha.shape[1] == width
     for band in prange(n_bands):
-        thread = get_thread_id()
-        acc = acc_all[thread]
-        tmp = tmp_all[thread]
-        grid = grid_all[thread]
-        rows = rows_all[thread]
-        stack = stack_all[thread]
+        acc = scratch(nch, np.float64)
+        tmp = scratch(3 * nch, np.float64)
         for c in range(3 * nch):
             tmp[c] = 0.0
+        grid = scratch((3, 3, 3), np.float64)
+        rows = scratch((TILE * MAX_ROW_SAMPLES, 9), np.float64)
+        stack = scratch((16, 3), np.int64)
         for tile_i0 in range(0, width, TILE):
             stack[0, 0] = tile_i0
             stack[0, 1] = band * TILE
