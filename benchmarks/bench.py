@@ -7,6 +7,7 @@ Run by hand and quote the figures; nothing here is a test.
     python benchmarks/bench.py e2e          # whole-process lat-long 2048x1024 EXR -> cube-vcross 512
     python benchmarks/bench.py batch        # envconv batch of 20 such files, -j 1 and -j 2
     python benchmarks/bench.py mips         # a whole mip chain against level 0 alone
+    python benchmarks/bench.py versus TREE  # e2e, interleaved, against another checkout
 
 Kernel throughput counts output supersamples (pixels × S²) per second of kernel wall time, for
 lat-long 4096×2048 → cube-vcross 1024 on all cores, after one warm-up run. End-to-end time runs
@@ -16,6 +17,7 @@ several runs and excludes the first (which may compile). Peak memory is the chil
 
 from __future__ import annotations
 
+import compileall
 import os
 import resource
 import shutil
@@ -90,8 +92,6 @@ def _run(cmd: list[str]) -> tuple[float, float]:
 def _compile_bytecode() -> None:
     """Write envconv's .pyc files, as installing the package does (an editable install under
     PYTHONDONTWRITEBYTECODE would otherwise compile every module at every start)."""
-    import compileall
-
     compileall.compile_dir(os.path.join(ROOT, "envconv"), quiet=1)
 
 
@@ -118,6 +118,44 @@ def bench_e2e(runs: int = 6) -> None:
         start = time.perf_counter()
         subprocess.run([sys.executable, "-c", "import envconv.cli"], check=True)
         print(f"import envconv.cli: {time.perf_counter() - start:.3f} s (process start included)")
+
+
+def bench_versus(other: str, runs: int = 12) -> None:
+    """The e2e lat-long 2048x1024 -> cube-vcross 512 (zip and uncompressed) of this checkout and
+    of ``other`` (another checkout of envconv, e.g. ``git worktree add /tmp/old <commit>``),
+    run alternately so that the machine's drift hits both alike. Each tree's kernels are
+    compiled by a first, unreported run. Both run in a scratch directory, so that neither
+    imports the other's package from the working directory."""
+    other = os.path.abspath(other)
+    if not os.path.isfile(os.path.join(other, "envconv", "__init__.py")):
+        raise SystemExit(f"{other} is not a checkout of envconv")
+    runner = "import sys; from envconv.cli import main; sys.argv[0] = 'envconv'; main()"
+    trees = {"this": ROOT, "other": other}
+    for tree in trees.values():
+        compileall.compile_dir(os.path.join(tree, "envconv"), quiet=1)
+    cases = {"zip": [], "none": ["--compression", "none"]}
+    with tempfile.TemporaryDirectory() as tmp:
+        src_path = os.path.join(tmp, "latlong-2048.exr")
+        envconv.write(_latlong(1024), src_path, bit_depth="float")
+
+        def run(tree: str, case: str) -> float:
+            env = {**os.environ, "PYTHONPATH": trees[tree]}
+            out = os.path.join(tmp, f"{tree}-{case}.exr")
+            cmd = [sys.executable, "-c", runner, "convert", src_path, out, "--to", "cube-vcross",
+                   "--size", "512", *cases[case]]  # fmt: skip
+            start = time.perf_counter()
+            subprocess.run(cmd, check=True, cwd=tmp, env=env, stdout=subprocess.DEVNULL)
+            return time.perf_counter() - start
+
+        times = {(tree, case): [] for tree in trees for case in cases}
+        for key in times:
+            run(*key)  # may compile
+        for _ in range(runs):
+            for key in times:
+                times[key].append(run(*key))
+    for (tree, case), values in times.items():
+        label = ROOT if tree == "this" else other
+        print(f"versus {case:4s} {label}: median {statistics.median(values):.3f} s, best {min(values):.3f} s over {runs} runs")
 
 
 # --- batch (issue 5) ------------------------------------------------------------------------
@@ -190,6 +228,11 @@ def bench_mips(repeats: int = 7) -> None:
 def main(argv: list[str]) -> None:
     which = argv[1:] or ["kernel", "e2e", "batch", "mips"]
     print(f"envconv {envconv.__version__}, numpy {np.__version__}, {os.cpu_count()} cores")
+    if which[0] == "versus":
+        if len(which) != 2:
+            raise SystemExit("usage: python benchmarks/bench.py versus OTHER_CHECKOUT")
+        bench_versus(which[1])
+        return
     if "kernel" in which:
         bench_kernel()
     if "e2e" in which:
