@@ -95,6 +95,8 @@ _PRIMARIES = re.compile(r"_(rec709|ap1|ap0)_scene$")
 
 @lru_cache(maxsize=8)
 def _load(path: str | None, env: str | None) -> Any:
+    if path is None and not (env or "").strip():
+        return color.builtin_config()  # loaded only if a question needs OCIO
     return color.load_config(path)
 
 
@@ -133,6 +135,8 @@ def _map_levels(envmap: EnvMap, fn, **changes) -> EnvMap:
 
 def _convert(pixels: np.ndarray, src: str, dst: str, config: Any) -> np.ndarray:
     """Colour conversion that keeps NaN/Inf in their own channel (a matrix would spread them)."""
+    if src == dst:  # nothing to convert: no NaN scan over the whole image
+        return color.convert_colorspace(pixels, src, dst, config)
     sl = depth.colour_slice(pixels.shape[2])
     bad = ~np.isfinite(pixels[..., sl])
     if not bad.any():
