@@ -22,14 +22,64 @@ dispatchers type a plain ndarray with the rest of that same rule (:func:`_type_p
 Starting NRT compiles its few LLVM functions (atomic reference counts) afresh in every process:
 0.02 s. envconv keeps their machine code next to its kernels' cache, keyed like numba's own
 entries by numba's version and the host CPU (:func:`_start_runtime`).
+
+Importing numba imports PyYAML, when installed, for a ``.numba_config.yaml`` that is seldom
+there: 0.01–0.02 s. The command line imports numba without it when there is no such file, and
+numba imports PyYAML the first time one appears (:func:`_import_numba`).
 """
 
 import contextlib
 import hashlib
+import importlib.util
 import os
 import pickle
+import sys
 
-import numba
+
+def _import_numba():
+    """Import numba; in envconv's command line, without PyYAML unless it is needed.
+
+    numba imports PyYAML at import time only to read a ``.numba_config.yaml`` in the working
+    directory, which it looks for again whenever it compiles. When the file is not there, the
+    import of PyYAML is refused for as long as numba's own import lasts (numba then records
+    that it has no PyYAML); afterwards, if PyYAML is installed, numba's config is told it has
+    it and gets a stand-in that imports it on first use. Refusing an import is seen by every
+    thread, so this is done only in a process the command line runs (``envconv.
+    _COMMAND_LINE_PROCESS``), never in someone else's program. With the file there, or
+    PyYAML or numba already imported, numba is imported as usual.
+    """
+    if "numba" in sys.modules:
+        return sys.modules["numba"]
+    skip_yaml = (
+        getattr(sys.modules.get("envconv"), "_COMMAND_LINE_PROCESS", False) is True
+        and "yaml" not in sys.modules
+        and not os.path.isfile(".numba_config.yaml")
+    )
+    if skip_yaml:
+        sys.modules["yaml"] = None  # "import yaml" raises ImportError
+    try:
+        import numba
+    finally:
+        if skip_yaml and "yaml" in sys.modules and sys.modules["yaml"] is None:
+            del sys.modules["yaml"]
+    config = getattr(getattr(numba, "core", None), "config", None)
+    if skip_yaml and getattr(config, "_HAVE_YAML", True) is False and importlib.util.find_spec("yaml"):
+        config.yaml = _YamlOnDemand()
+        config._HAVE_YAML = True
+    return numba
+
+
+class _YamlOnDemand:
+    """What numba's config uses of PyYAML, importing it on first use."""
+
+    @staticmethod
+    def safe_load(stream):
+        import yaml
+
+        return yaml.safe_load(stream)
+
+
+numba = _import_numba()
 
 __all__ = ["jit", "jit_inline", "jit_parallel", "FASTMATH"]
 

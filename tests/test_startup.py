@@ -326,3 +326,44 @@ def test_the_console_script_ends_alike_with_or_without_interpreter_teardown(tmp_
     assert handlers.returncode == 0
     assert handlers.stdout.splitlines()[0].startswith("latlong")
     assert handlers.stdout.splitlines()[-1] == "atexit ran"
+
+
+_NUMBA_YAML_PROBE = (
+    "import sys, envconv\n"
+    "envconv._COMMAND_LINE_PROCESS = sys.argv[1] == 'cli'\n"
+    "import envconv._jit, numba\n"
+    "print('yaml' in sys.modules, numba.config.NUMBA_NUM_THREADS)\n"
+)
+
+
+def test_the_command_line_imports_numba_without_pyyaml_and_numba_still_reads_its_config(tmp_path):
+    """PyYAML serves only numba's ``.numba_config.yaml``. A command-line process imports numba
+    without it when the working directory has none; a library import is left alone. Either
+    way numba still reads such a file: at import when it is there, and at its next config
+    reload (as before every compilation) when it appears later."""
+    pytest.importorskip("yaml")
+    threads = os.cpu_count()
+
+    def probe(mode, cwd):
+        done = subprocess.run([sys.executable, "-c", _NUMBA_YAML_PROBE, mode], cwd=cwd,
+                              capture_output=True, text=True)  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        return done.stdout.split()
+
+    assert probe("cli", tmp_path) == ["False", str(threads)]
+    assert probe("library", tmp_path) == ["True", str(threads)]
+    (tmp_path / ".numba_config.yaml").write_text("num_threads: 1\n")
+    assert probe("cli", tmp_path) == ["True", "1"]
+
+    later = tmp_path / "later"
+    later.mkdir()
+    code = (
+        _NUMBA_YAML_PROBE
+        + "import pathlib\n"
+        + "pathlib.Path('.numba_config.yaml').write_text('num_threads: 1')\n"
+        + "numba.core.config.reload_config()\n"
+        + "print(numba.config.NUMBA_NUM_THREADS)\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code, "cli"], cwd=later, capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == ["False", str(threads), "1"]

@@ -256,6 +256,9 @@ def _finish(code: int) -> None:
 
 def main() -> None:
     """Console-script entry point."""
+    import envconv
+
+    envconv._COMMAND_LINE_PROCESS = True
     _read_ahead_input(sys.argv[1:])
     try:
         cli.main(prog_name="envconv", standalone_mode=True)
