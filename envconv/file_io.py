@@ -3,8 +3,9 @@
 This module knows files, not layouts: :mod:`envconv.io` builds environment maps on top of it.
 It imports neither numba nor the layouts, so a command can start decoding its input on a
 helper thread (:func:`read_ahead`) while the rest of envconv is still being imported: OIIO and
-OpenEXR release the GIL while they decode. Plain scanline EXRs are decoded by OpenEXR
-(:mod:`envconv.exr_io`), everything else by OIIO.
+OpenEXR release the GIL while they decode. Plain scanline EXRs are decoded by OpenEXR, and the
+commonest (RGB or RGBA, with attributes OIIO's reading of which is known) are read by it alone,
+so that OIIO is not imported (:mod:`envconv.exr_io`); everything else is read by OIIO.
 """
 
 from __future__ import annotations
@@ -21,6 +22,7 @@ import numpy as np
 from .errors import ImageIOError
 from .exr_io import is_plain_exr as _plain_exr
 from .exr_io import read_exr_pixels as _read_exr_pixels
+from .exr_io import read_plain_exr as _read_plain_exr
 
 __all__ = ["read_image", "read_header", "read_pixel_type", "read_ahead", "join_read_ahead", "FORMATS"]
 
@@ -59,11 +61,15 @@ def read_image(path: str | os.PathLike, level: int = 0):
 
 
 def _decode(path: str, level: int, threads: int | None = None):
-    oiio = _oiio()
     if not os.path.exists(path):
         raise ImageIOError(f"input file not found: {path}")
     if os.path.isdir(path):
         raise ImageIOError(f"input is a directory, not an image: {path}")
+    if level == 0 and path.lower().endswith(".exr"):
+        plain = _read_plain_exr(path, threads)  # OIIO's reading, without loading OIIO
+        if plain is not None:
+            return plain
+    oiio = _oiio()
     # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
     # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.
     config = oiio.ImageSpec()

@@ -17,7 +17,7 @@ import logging
 import os
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -291,7 +291,6 @@ def _temp_path(target: str) -> str:
 
 def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
     """Write one file: ``images`` holds one image, or the levels of a MIP-mapped file."""
-    oiio = _oiio()
     fmt = _format_of(target)[0]
     if len(images) > 1:
         full = max(images[0].shape[:2]).bit_length()
@@ -306,26 +305,24 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
                 f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
             )
     if fmt == "openexr" and len(images) == 1:
-        spec, data = _level_spec(target, images[0], envmap, face, bit_depth, compression)
-        if level is not None:
-            spec.attribute("envconv:level", _int_tag(fmt, level))
-        if _prefer_openexr_writer(spec) and _write_plain_exr(temp, spec, data):
+        image = _level_image(target, images[0], envmap, face, bit_depth, compression, level)
+        if _prefer_openexr_writer(image.attributes) and _write_plain_exr(temp, image):
             return
+    oiio = _oiio()
     out = oiio.ImageOutput.create(temp)
     if out is None:
         raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
     try:
         for k, pixels in enumerate(images):
-            spec, data = _level_spec(target, pixels, envmap, face, bit_depth, compression)
-            if level is not None:
-                spec.attribute("envconv:level", _int_tag(fmt, level))
+            image = _level_image(target, pixels, envmap, face, bit_depth, compression, level)
+            spec = _image_spec(image)
             mode = "Create"
             if len(images) > 1:
                 _set_mip_attributes(spec, fmt)
                 mode = "Create" if k == 0 else "AppendMIPLevel" if fmt == "openexr" else "AppendSubimage"
             if not out.open(temp, spec, mode):
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-            if not out.write_image(data):
+            if not out.write_image(image.data):
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
     finally:
         ok = out.close()
@@ -350,9 +347,23 @@ def _set_mip_attributes(spec, fmt: str) -> None:
         spec.attribute("textureformat", "Plain Texture")
 
 
-def _level_spec(target, pixels, envmap: EnvMap, face, bit_depth, compression):
-    """(ImageSpec, float32 data) of one image of ``envmap`` written to ``target``."""
-    oiio = _oiio()
+class LevelImage(NamedTuple):
+    """One image as it is to be written, before any image library is involved.
+
+    ``attributes`` are the (name, value) pairs its OIIO ImageSpec gets, in that order (see
+    :func:`_image_spec`); ``data`` is (H, W, C) float32 holding the values to store (codes,
+    half or float, from :func:`envconv.colorflow.encode_output`)."""
+
+    format: str
+    channels: tuple[str, ...]
+    pixel_type: str
+    alpha_index: int | None
+    attributes: list[tuple[str, Any]]
+    data: np.ndarray
+
+
+def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, level=None):
+    """The :class:`LevelImage` of one image of ``envmap`` written to ``target``."""
     fmt, _, _, max_channels = _format_of(target)
     pixel_type = choose_pixel_type(target, envmap.pixel_type, bit_depth)
     channels = list(envmap.channels)
@@ -368,21 +379,33 @@ def _level_spec(target, pixels, envmap: EnvMap, face, bit_depth, compression):
     if fmt == "hdr" and len(channels) != 3:
         pixels = np.repeat(pixels[:, :, :1], 3, axis=2)
         channels = ["R", "G", "B"]
-    height, width, nch = pixels.shape
-    spec = oiio.ImageSpec(width, height, nch, getattr(oiio, pixel_type.upper()))
-    spec.channelnames = tuple(channels)
-    if envmap.alpha_index is not None and envmap.alpha_index < nch:
-        spec.alpha_channel = envmap.alpha_index
-        if fmt in ("png", "tiff"):
-            # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
-            # mark it premultiplied (TIFF). envconv's alpha is a validity mask.
-            spec.attribute("oiio:UnassociatedAlpha", 1)
-    for name, value in envmap.metadata.items():
-        _set_attribute(spec, name, value)
-    _set_envconv_tags(spec, envmap, fmt, face)
+    nch = pixels.shape[2]
+    alpha = envmap.alpha_index if envmap.alpha_index is not None and envmap.alpha_index < nch else None
+    attributes: list[tuple[str, Any]] = []
+    if alpha is not None and fmt in ("png", "tiff"):
+        # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
+        # mark it premultiplied (TIFF). envconv's alpha is a validity mask.
+        attributes.append(("oiio:UnassociatedAlpha", 1))
+    attributes.extend(envmap.metadata.items())
+    attributes.extend(_envconv_tags(envmap, fmt, face))
     if compression is not None:
-        spec.attribute("compression", compression)
-    return spec, np.ascontiguousarray(pixels)  # codes/half/float from colorflow.encode_output
+        attributes.append(("compression", compression))
+    if level is not None:
+        attributes.append(("envconv:level", _int_tag(fmt, level)))
+    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, np.ascontiguousarray(pixels))
+
+
+def _image_spec(image: LevelImage):
+    """The OIIO ImageSpec of ``image``."""
+    oiio = _oiio()
+    height, width, nch = image.data.shape
+    spec = oiio.ImageSpec(width, height, nch, getattr(oiio, image.pixel_type.upper()))
+    spec.channelnames = image.channels
+    if image.alpha_index is not None:
+        spec.alpha_channel = image.alpha_index
+    for name, value in image.attributes:
+        _set_attribute(spec, name, value)
+    return spec
 
 
 # TIFF, Radiance HDR and JPEG keep only the attributes their format defines, so envconv's
@@ -390,31 +413,37 @@ def _level_spec(target, pixels, envmap: EnvMap, face, bit_depth, compression):
 _DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
 
 
-def _set_envconv_tags(spec, envmap: EnvMap, fmt: str, face: str | None) -> None:
+def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str, Any]]:
+    """The attributes that tag a file as envconv's: layout, size, guard, version, face, and
+    OpenEXR's envmap (through OIIO's ``textureformat``)."""
     from . import __version__
 
+    tags: list[tuple[str, Any]] = []
     if fmt in _DESCRIPTION_FORMATS:
-        tags = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
+        words = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
         if face is not None:
-            tags["face"] = face
-        text = " ".join(f"envconv:{k}={v}" for k, v in tags.items())
+            words["face"] = face
+        text = " ".join(f"envconv:{k}={v}" for k, v in words.items())
         kept = str(envmap.metadata.get("ImageDescription", "")).strip()
-        spec.attribute("ImageDescription", f"{kept} {text}".strip())
+        tags.append(("ImageDescription", f"{kept} {text}".strip()))
 
-    spec.attribute("envconv:layout", envmap.layout.name)
-    spec.attribute("envconv:size", _int_tag(fmt, envmap.size))
-    spec.attribute("envconv:guard", _int_tag(fmt, envmap.guard))
-    spec.attribute("envconv:version", __version__)
-    spec.attribute("Software", f"envconv {__version__}")
+    tags += [
+        ("envconv:layout", envmap.layout.name),
+        ("envconv:size", _int_tag(fmt, envmap.size)),
+        ("envconv:guard", _int_tag(fmt, envmap.guard)),
+        ("envconv:version", __version__),
+        ("Software", f"envconv {__version__}"),
+    ]
     if face is not None:
-        spec.attribute("envconv:face", face)
+        tags.append(("envconv:face", face))
     if fmt == "openexr" and envmap.guard == 0:
         # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
         # "envmap" string would be stored with the wrong type and make the file unreadable.
         if envmap.layout.name == "latlong":
-            spec.attribute("textureformat", "LatLong Environment")
+            tags.append(("textureformat", "LatLong Environment"))
         elif envmap.layout.name == "cube-exr":
-            spec.attribute("textureformat", "CubeFace Environment")
+            tags.append(("textureformat", "CubeFace Environment"))
+    return tags
 
 
 def _set_attribute(spec, name: str, value: Any) -> None:

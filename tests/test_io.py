@@ -406,15 +406,133 @@ def test_plain_exr_reads_as_oiio_does(tmp_path, monkeypatch, names, pixel_type):
     path = tmp_path / "plain.exr"
     _oiio_exr(path, pixels, names, pixel_type)
     decoded = []
-    original = file_io_module._read_exr_pixels
-    monkeypatch.setattr(
-        file_io_module, "_read_exr_pixels", lambda *a: decoded.append(1) or original(*a)
-    )
-    got, channels, _, stored = read_image(path)
-    assert decoded and stored == pixel_type
-    expected = _oiio_pixels(path)
+    for name in ("_read_exr_pixels", "_read_plain_exr"):
+        original = getattr(file_io_module, name)
+
+        def spy(*args, _name=name, _original=original):
+            result = _original(*args)
+            if result is not None:
+                decoded.append(_name)
+            return result
+
+        monkeypatch.setattr(file_io_module, name, spy)
+    got, channels, metadata, stored = read_image(path)
+    # RGB and RGBA are read by OpenEXR alone; other channel sets are opened by OIIO.
+    alone = tuple(names) in (("R", "G", "B"), ("R", "G", "B", "A"))
+    assert decoded == ["_read_plain_exr" if alone else "_read_exr_pixels"]
+    assert stored == pixel_type
     assert channels == tuple(_oiio_channel_names(path))
-    np.testing.assert_array_equal(got, expected)
+    np.testing.assert_array_equal(got, _oiio_pixels(path))
+    assert list(metadata.items()) == list(_oiio_metadata(path).items())
+
+
+def _openexr_file(path, extra=None, dtype=np.float32, names="RGB", compression="ZIP_COMPRESSION",
+                  parts=1):  # fmt: skip
+    """Write a small scanline EXR with the OpenEXR library, header ``extra`` added."""
+    import OpenEXR
+
+    rng = np.random.default_rng(len(names))
+    pixels = (rng.standard_normal((6, 10, len(names))) * 50).astype(dtype)
+    header = {"type": OpenEXR.scanlineimage, "compression": getattr(OpenEXR, compression)}
+    header.update(extra or {})
+    channels = {names: pixels}
+    if parts == 1:
+        exr = OpenEXR.File(header, channels)
+    else:
+        exr = OpenEXR.File([OpenEXR.Part(dict(header), channels, f"part{k}") for k in range(parts)])
+    with exr:
+        exr.write(os.fspath(path))
+
+
+def _plain_exr_cases():
+    import OpenEXR
+
+    chromaticities = (0.713, 0.293, 0.165, 0.83, 0.128, 0.044, 0.32168, 0.33767)
+    read_alone = {
+        "zip float": {},
+        "latlong envmap": {"envmap": OpenEXR.Envmap.ENVMAP_LATLONG, "textureformat": "LatLong Environment"},
+        "cube envmap": {"envmap": OpenEXR.Envmap.ENVMAP_CUBE},
+        "textureformat alone": {"textureformat": "LatLong Environment"},
+        "ap1": {"chromaticities": chromaticities, "colorInteropID": "lin_ap1_scene"},
+        "chromaticities alone": {"chromaticities": chromaticities},
+        "other interop id": {"colorInteropID": "srgb_rec709_scene"},
+        "decreasing lines": {"lineOrder": OpenEXR.DECREASING_Y},
+        "envconv tags": {"capDate": "2024:05:06 07:08:09", "Software": "envconv 0.1.0",
+                         "envconv:layout": "latlong", "envconv:size": 3, "envconv:guard": 0},
+        "odd window": {"pixelAspectRatio": 2.0, "screenWindowCenter": np.array([0.5, -1.0], np.float32),
+                       "screenWindowWidth": 3.0},
+        **{c: dict(compression=c) for c in ("NO_COMPRESSION", "RLE_COMPRESSION", "ZIPS_COMPRESSION",
+                                            "PIZ_COMPRESSION", "PXR24_COMPRESSION", "B44_COMPRESSION",
+                                            "B44A_COMPRESSION", "DWAA_COMPRESSION", "DWAB_COMPRESSION")},
+        "half RGBA": dict(dtype=np.float16, names="RGBA"),
+    }  # fmt: skip
+    read_by_oiio = {
+        "owner (OIIO's Copyright)": {"owner": "someone"},
+        "unknown int": {"envconv:size": 3, "foo": 4},
+        "DWA level": {"dwaCompressionLevel": 80.0},
+        "two parts": dict(parts=2),
+        "luminance": dict(names="Y"),
+    }  # fmt: skip
+    for cases, alone in ((read_alone, True), (read_by_oiio, False)):
+        for label, case in cases.items():
+            known = {"compression", "dtype", "names", "parts"}
+            keywords = {k: v for k, v in case.items() if k in known}
+            extra = {k: v for k, v in case.items() if k not in known}
+            yield label, extra, keywords, alone
+
+
+@pytest.mark.parametrize("label", [case[0] for case in _plain_exr_cases()])
+def test_openexr_alone_reads_plain_files_exactly_as_oiio(tmp_path, label):
+    """A plain RGB or RGBA scanline EXR is read without OIIO: pixels, channels, pixel type and
+    every attribute (names, values, OIIO's order) must be OIIO's own reading of the same file.
+    A file with anything whose OIIO reading is not known is left to OIIO."""
+    from envconv.exr_io import read_plain_exr
+
+    _, extra, keywords, alone = next(c for c in _plain_exr_cases() if c[0] == label)
+    path = tmp_path / "case.exr"
+    _openexr_file(path, extra, **keywords)
+    got = read_plain_exr(os.fspath(path))
+    expected = (_oiio_pixels(path), _oiio_channel_names(path), _oiio_metadata(path))
+    if not alone:
+        assert got is None
+        got = read_image(path)
+    else:
+        assert got is not None
+    pixels, channels, metadata, pixel_type = got
+    np.testing.assert_array_equal(pixels.reshape(-1), np.asarray(expected[0]).reshape(-1))
+    assert channels == tuple(expected[1])
+    assert list(metadata.items()) == list(expected[2].items())
+    assert pixel_type == ("half" if keywords.get("dtype") == np.float16 else "float")
+
+
+def test_files_openexr_cannot_read_alone_go_to_oiio(tmp_path):
+    """Tiled, offset data window, mixed pixel types, damaged: read_plain_exr declines."""
+    import OpenImageIO as oiio
+
+    from envconv.exr_io import read_plain_exr
+
+    pixels = np.random.default_rng(8).random((16, 32, 3)).astype(np.float32)
+    _oiio_exr(tmp_path / "tiled.exr", pixels, "RGB", "float", tile=16)
+    _oiio_exr(tmp_path / "window.exr", pixels, "RGB", "float", data_offset=2)
+    spec = oiio.ImageSpec(32, 16, 3, oiio.FLOAT)
+    spec.channelnames = ("R", "G", "B")
+    spec.channelformats = (oiio.HALF, oiio.FLOAT, oiio.FLOAT)
+    out = oiio.ImageOutput.create(os.fspath(tmp_path / "mixed.exr"))
+    assert out.open(os.fspath(tmp_path / "mixed.exr"), spec) and out.write_image(pixels)
+    out.close()
+    (tmp_path / "junk.exr").write_bytes(b"\x76\x2f\x31\x01" + b"junk" * 20)
+    for name in ("tiled", "window", "mixed", "junk"):
+        assert read_plain_exr(os.fspath(tmp_path / f"{name}.exr")) is None, name
+
+
+def _oiio_metadata(path):
+    """The ImageSpec attributes OIIO reads from ``path``, in its order."""
+    import OpenImageIO as oiio
+
+    inp = oiio.ImageInput.open(os.fspath(path))
+    metadata = {a.name: a.value for a in inp.spec().extra_attribs}
+    inp.close()
+    return metadata
 
 
 def _oiio_channel_names(path):
@@ -532,19 +650,13 @@ def test_exr_attributes_oiio_must_translate_go_through_oiio(tmp_path, monkeypatc
 
 def test_openexr_writer_takes_the_compressions_it_can_spell():
     """Lossless compressions OpenEXR spells go to its writer; a level or a lossy DWA to OIIO."""
-    import OpenImageIO as oiio
-
     from envconv.io import _prefer_openexr_writer
 
-    def spec(compression):
-        s = oiio.ImageSpec(4, 4, 3, oiio.FLOAT)
-        s.attribute("compression", compression)
-        return s
-
     for compression in ("none", "rle", "zip", "zips", "piz"):
-        assert _prefer_openexr_writer(spec(compression)), compression
+        assert _prefer_openexr_writer([("compression", compression)]), compression
     for compression in ("zip:9", "dwaa", "dwab:45"):
-        assert not _prefer_openexr_writer(spec(compression)), compression
+        assert not _prefer_openexr_writer([("compression", compression)]), compression
+    assert _prefer_openexr_writer([("Software", "x")])  # OIIO's default: zip
 
 
 def test_openexr_thread_pool_follows_oiio_exr_threads():

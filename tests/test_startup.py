@@ -367,3 +367,50 @@ def test_the_command_line_imports_numba_without_pyyaml_and_numba_still_reads_its
     done = subprocess.run([sys.executable, "-c", code, "cli"], cwd=later, capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["False", str(threads), "1"]
+
+
+def test_an_exr_to_exr_command_never_loads_openimageio(tmp_path):
+    """A plain RGB EXR in and out is read and written by the OpenEXR library alone, so the
+    command line never imports OpenImageIO (0.035 s); the file it writes holds what
+    converting in this process gives."""
+    source = envconv.EnvMap(np.random.default_rng(9).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
+    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
+    code = (
+        "import atexit, sys\n"
+        "from envconv.cli.main import main\n"
+        "atexit.register(lambda: print('OpenImageIO' in sys.modules))\n"
+        "sys.argv = ['envconv', *sys.argv[1:]]\n"
+        "main()\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code, "convert", str(tmp_path / "src.exr"),
+                           str(tmp_path / "out.exr"), "--to", "cube-vcross", "--size", "8"],
+                          capture_output=True, text=True)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split()[-1] == "False"
+    expected = envconv.convert(envconv.read(tmp_path / "src.exr"), to="cube-vcross", size=8)
+    written = envconv.read(tmp_path / "out.exr")
+    np.testing.assert_array_equal(written.pixels, expected.pixels)
+    assert written.layout.name == "cube-vcross"
+
+
+@pytest.mark.parametrize("variable", [None, "OPENIMAGEIO_THREADS"])
+def test_openexr_threads_follow_oiio_without_loading_it_unless_configured(variable):
+    """Without OIIO loaded and no OIIO variable set, OIIO would use every core: OpenEXR gets
+    as many threads without importing OIIO. A variable that sets OIIO's threads is obeyed."""
+    code = (
+        "import os, sys, OpenEXR\n"
+        "from envconv.exr_io import _set_openexr_threads\n"
+        "_set_openexr_threads('zip')\n"
+        "print(OpenEXR.global_thread_count(), 'OpenImageIO' in sys.modules)\n"
+    )
+    env = {k: v for k, v in os.environ.items() if not k.startswith("OPENIMAGEIO_")}
+    if variable:
+        env[variable] = "1"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    assert done.returncode == 0, done.stderr
+    threads, loaded = done.stdout.split()
+    if variable:
+        assert (threads, loaded) == ("0", "True")  # one thread: OpenEXR's caller does the work
+    else:
+        cores = os.cpu_count() or 1
+        assert (int(threads), loaded) == (cores if cores > 1 else 0, "False")
