@@ -23,6 +23,7 @@ from .errors import ImageIOError
 from .exr_io import is_plain_exr as _plain_exr
 from .exr_io import read_exr_pixels as _read_exr_pixels
 from .exr_io import read_plain_exr as _read_plain_exr
+from .exr_io import read_plain_exr_header as _read_plain_exr_header
 
 __all__ = ["read_image", "read_header", "read_pixel_type", "read_ahead", "join_read_ahead", "FORMATS"]
 
@@ -120,6 +121,10 @@ def read_header(path: str | os.PathLike, level: int = 0):
     width, height, channel names, metadata dict (of MIP level ``level``)
     """
     path = os.fspath(path)
+    if level == 0 and path.lower().endswith(".exr") and os.path.isfile(path):
+        plain = _read_plain_exr_header(path)  # OIIO's reading, without loading OIIO
+        if plain is not None:
+            return plain
     with _open_input(path) as inp:
         if level and not inp.seek_subimage(0, level):
             raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")

@@ -25,6 +25,7 @@ from .detect import detect_layout
 from .envmap import EnvMap
 from .errors import ImageIOError, LayoutError
 from .exr_io import prefer_openexr_writer as _prefer_openexr_writer
+from .exr_io import read_plain_exr_header as _read_plain_exr_header
 from .exr_io import write_plain_exr as _write_plain_exr
 from .file_io import (
     FORMATS,
@@ -138,6 +139,10 @@ def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
     if "{face}" in path:
         first = _part_path(path, "px")
         path = first if os.path.exists(first) else _part_path(path, "front")
+    if path.lower().endswith(".exr") and os.path.isfile(path):
+        plain = _read_plain_exr_header(path)  # a plain file has no MIP levels
+        if plain is not None:
+            return [plain[:2]]
     with _open_input(path) as inp:
         sizes = []
         while inp.seek_subimage(0, len(sizes)):

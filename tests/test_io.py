@@ -498,6 +498,12 @@ def test_openexr_alone_reads_plain_files_exactly_as_oiio(tmp_path, label):
         got = read_image(path)
     else:
         assert got is not None
+        # The header alone reads the same, and a plain file has one level.
+        from envconv.io import mip_levels, read_header
+
+        height, width = got[0].shape[:2]
+        assert read_header(path) == (width, height, got[1], got[2])
+        assert mip_levels(path) == [(width, height)]
     pixels, channels, metadata, pixel_type = got
     np.testing.assert_array_equal(pixels.reshape(-1), np.asarray(expected[0]).reshape(-1))
     assert channels == tuple(expected[1])

@@ -369,10 +369,10 @@ def test_the_command_line_imports_numba_without_pyyaml_and_numba_still_reads_its
     assert done.stdout.split() == ["False", str(threads), "1"]
 
 
-def test_an_exr_to_exr_command_never_loads_openimageio(tmp_path):
-    """A plain RGB EXR in and out is read and written by the OpenEXR library alone, so the
-    command line never imports OpenImageIO (0.035 s); the file it writes holds what
-    converting in this process gives."""
+def test_exr_commands_never_load_openimageio(tmp_path):
+    """A plain RGB EXR in and out is read and written by the OpenEXR library alone, so neither
+    ``convert`` nor ``info`` imports OpenImageIO (0.035 s); the file written holds what
+    converting in this process gives, and ``info`` reports what it reports here."""
     source = envconv.EnvMap(np.random.default_rng(9).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
     envconv.write(source, tmp_path / "src.exr", bit_depth="float")
     code = (
@@ -391,6 +391,15 @@ def test_an_exr_to_exr_command_never_loads_openimageio(tmp_path):
     written = envconv.read(tmp_path / "out.exr")
     np.testing.assert_array_equal(written.pixels, expected.pixels)
     assert written.layout.name == "cube-vcross"
+
+    done = subprocess.run([sys.executable, "-c", code, "info", str(tmp_path / "out.exr"), "--json"],
+                          capture_output=True, text=True)  # fmt: skip
+    assert done.returncode == 0, done.stderr
+    *report, loaded = done.stdout.splitlines()
+    assert loaded == "False"
+    import json
+
+    assert json.loads("\n".join(report)) == envconv.info.describe(str(tmp_path / "out.exr"))
 
 
 @pytest.mark.parametrize("variable", [None, "OPENIMAGEIO_THREADS"])
