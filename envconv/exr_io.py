@@ -7,9 +7,9 @@ by default, one in a batch worker), so both libraries use the cores alike: on tw
 decodes a 2048×1024 zip float in 0.03 s against OIIO's 0.12 s, and writes a 512 cross with zip
 in 0.14 s against 0.19–0.25 s.
 
-- Reading: a plain RGB or RGBA file whose attributes all have a known OIIO reading is read by
-  OpenEXR alone, header included (:func:`read_plain_exr`, :func:`read_plain_exr_header`), and
-  OIIO is not even imported
+- Reading: a plain RGB or RGBA file whose attributes all have a known OIIO reading (for the
+  installed OIIO version) is read by OpenEXR alone, header included (:func:`read_plain_exr`,
+  :func:`read_plain_exr_header`), and OIIO is not even imported
   (0.035 s of a one-shot command); other plain files are opened by OIIO and decoded by OpenEXR
   (:func:`read_exr_pixels`); anything else is read by OIIO.
 - Writing: a plain file is written by OpenEXR when each attribute has a known OIIO spelling
@@ -21,6 +21,7 @@ Either way the pixels, channels and attributes are those OIIO would give or writ
 
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import sys
@@ -125,6 +126,28 @@ _OIIO_LINE_ORDERS = {"INCREASING_Y": "increasingY", "DECREASING_Y": "decreasingY
 _STRUCTURAL = {"channels", "compression", "dataWindow", "displayWindow", "type", "envmap"}
 
 
+#: OIIO versions (major.minor) whose reading of a plain header :func:`_oiio_metadata` gives,
+#: as tests/test_io.py checks against OIIO itself. With any other, OIIO reads every file.
+_OIIO_READINGS_KNOWN = ("3.2",)
+
+
+@functools.cache
+def _oiio_reading_known() -> bool:
+    """Whether the installed OIIO is one whose reading :func:`_oiio_metadata` reproduces (its
+    version from the installed distribution, so that OIIO need not be imported)."""
+    oiio = sys.modules.get("OpenImageIO")
+    try:
+        if oiio is not None:
+            version = oiio.__version__
+        else:
+            from importlib import metadata
+
+            version = metadata.version("OpenImageIO")
+    except Exception:  # not installed as a distribution: OIIO reads
+        return False
+    return ".".join(str(version).split(".")[:2]) in _OIIO_READINGS_KNOWN
+
+
 def _oiio_metadata(header: dict[str, Any]) -> dict[str, Any] | None:
     """The attributes (name → value, in OIIO's order) OIIO's ImageSpec holds for a plain file
     with this OpenEXR ``header``, or None when one of them has no known OIIO reading."""
@@ -180,6 +203,8 @@ def read_plain_exr_header(path: str):
     the OpenEXR library alone, exactly as OIIO would give them (metadata as OIIO's ImageSpec
     attributes, in OIIO's order). None when the file is anything else, has an attribute whose
     OIIO reading is not known here, or cannot be read: then OIIO reads it or says why not."""
+    if not _oiio_reading_known():
+        return None
     import OpenEXR
 
     try:

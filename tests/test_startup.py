@@ -377,6 +377,10 @@ def test_exr_commands_never_load_openimageio(tmp_path):
     """A plain RGB EXR in and out is read and written by the OpenEXR library alone, so neither
     ``convert`` nor ``info`` imports OpenImageIO (0.035 s); the file written holds what
     converting in this process gives, and ``info`` reports what it reports here."""
+    from envconv.exr_io import _oiio_reading_known
+
+    if not _oiio_reading_known():
+        pytest.skip("this OIIO version's reading is not known to envconv: OIIO reads every file")
     source = envconv.EnvMap(np.random.default_rng(9).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
     envconv.write(source, tmp_path / "src.exr", bit_depth="float")
     code = (
