@@ -31,8 +31,7 @@ from typing import Any
 import numpy as np
 
 __all__ = ["is_plain_exr", "read_exr_pixels", "read_plain_exr", "read_plain_exr_header",
-           "prefer_openexr_writer",
-           "plain_exr_header", "write_plain_exr"]  # fmt: skip
+           "prefer_openexr_writer", "plain_exr_header", "write_plain_exr"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 

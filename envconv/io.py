@@ -309,17 +309,17 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
                 f"cannot write {target}: a MIP-mapped OpenEXR holds all {full} levels down to "
                 f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
             )
-    if fmt == "openexr" and len(images) == 1:
-        image = _level_image(target, images[0], envmap, face, bit_depth, compression, level)
-        if _prefer_openexr_writer(image.attributes) and _write_plain_exr(temp, image):
+    levels = [_level_image(target, pixels, envmap, face, bit_depth, compression, level)
+              for pixels in images]  # fmt: skip
+    if fmt == "openexr" and len(levels) == 1:
+        if _prefer_openexr_writer(levels[0].attributes) and _write_plain_exr(temp, levels[0]):
             return
     oiio = _oiio()
     out = oiio.ImageOutput.create(temp)
     if out is None:
         raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
     try:
-        for k, pixels in enumerate(images):
-            image = _level_image(target, pixels, envmap, face, bit_depth, compression, level)
+        for k, image in enumerate(levels):
             spec = _image_spec(image)
             mode = "Create"
             if len(images) > 1:
