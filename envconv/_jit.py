@@ -3,6 +3,14 @@
 Kernels are compiled with ``cache=True`` so that only the first run pays for compilation.
 HDR images carry inf and nan, so the fast-math flags exclude ``nnan`` and ``ninf``.
 
+Kernel modules take ``jit``, ``jit_inline``, ``jit_parallel``, ``intrinsic`` and ``prange``
+from here, never from numba: in a process the command line runs, numba is not imported at all
+while every kernel called is found in numba's cache. Such a kernel runs from numba's cached
+machine code through :mod:`envconv._cached_kernels` (0.15–0.2 s less start-up). The first call
+that needs numba itself (a cache miss, arguments of a new type) imports it and turns every
+deferred kernel into numba's dispatcher (:class:`_Deferred`, :func:`import_numba`).
+``ENVCONV_IMPORT_NUMBA=1`` imports numba at once, as a library import always does.
+
 Developers: numba checks a cached kernel against its own source file only. After editing a
 helper in another module (a layout's map, ``kernels/cells.py``...), delete the stale caches:
 ``find envconv -name '*.nbi' -delete -o -name '*.nbc' -delete``.
@@ -34,6 +42,7 @@ import importlib.util
 import os
 import pickle
 import sys
+import threading
 
 
 def _import_numba():
@@ -79,9 +88,144 @@ class _YamlOnDemand:
         return yaml.safe_load(stream)
 
 
-numba = _import_numba()
+def _deferring() -> bool:
+    """Whether this process defers numba (see :class:`_Deferred`): only a process the command
+    line runs, with numba not yet imported, a numba version and configuration that
+    :mod:`envconv._cached_kernels` knows, and no ``ENVCONV_IMPORT_NUMBA=1``."""
+    if getattr(sys.modules.get("envconv"), "_COMMAND_LINE_PROCESS", False) is not True:
+        return False
+    if os.environ.get("ENVCONV_IMPORT_NUMBA") or "numba" in sys.modules:
+        return False
+    from . import _cached_kernels
 
-__all__ = ["jit", "jit_inline", "jit_parallel", "FASTMATH"]
+    return _cached_kernels.unavailable_reason() is None
+
+
+#: numba, once imported (at once, unless this process defers it: see :class:`_Deferred`).
+numba = None if _deferring() else _import_numba()
+
+__all__ = ["jit", "jit_inline", "jit_parallel", "intrinsic", "prange", "FASTMATH", "import_numba"]
+
+_materialize_lock = threading.RLock()
+_deferred: list["_Deferred"] = []
+
+
+class _Deferred:
+    """A kernel, or another numba object, made only when numba is needed.
+
+    In a process the command line runs, importing numba (0.15–0.2 s) is put off: a kernel is
+    first looked up in numba's cache and, when its arguments match a cached specialisation,
+    run from that machine code without numba (:mod:`envconv._cached_kernels`). Anything else (a
+    cache miss, other argument types, an attribute of the dispatcher) imports numba and makes
+    every deferred object real at once (:func:`import_numba`): numba types a kernel's globals
+    when it compiles it, so they must all be numba's own objects by then.
+    """
+
+    def __init__(self, py_func, make):
+        self.py_func = py_func
+        self._make = make  # numba -> the real object
+        self._real = None
+        self._overloads = None  # cached specialisations, once looked up
+        self.__name__ = getattr(py_func, "__name__", "deferred")
+        self.__qualname__ = getattr(py_func, "__qualname__", self.__name__)
+        self.__doc__ = getattr(py_func, "__doc__", None)
+        self.__module__ = getattr(py_func, "__module__", __name__)
+        _deferred.append(self)
+
+    def __call__(self, *args, **kwargs):
+        real = self._real
+        if real is None:
+            if not kwargs:
+                call = self._cached_call(args)
+                if call is not None:
+                    return call(args)
+            import_numba()
+            real = self._real
+        return real(*args, **kwargs)
+
+    def _cached_call(self, args):
+        from . import _cached_kernels
+
+        if self._overloads is None:
+            self._overloads = _cached_kernels.load(self.py_func) or ()
+        if not self._overloads:
+            return None
+        types = tuple(_cached_kernels.arg_type_name(value) for value in args)
+        for overload in self._overloads:
+            if overload.arg_types == types:
+                return overload.call
+        return None
+
+    def __getattr__(self, name):
+        if name.startswith("__") or name == "_real":
+            raise AttributeError(name)
+        import_numba()
+        return getattr(self._real, name)
+
+    def __repr__(self):
+        return f"<deferred numba object {self.__qualname__}>"
+
+
+def import_numba():
+    """Import numba (if this process deferred it) and make every deferred object real.
+
+    Every global that names a deferred object, in envconv's modules and in the modules that
+    defined deferred kernels, is rebound to the real one. A thread pool that :mod:`envconv._cached_kernels` started becomes numba's own."""
+    global numba, prange
+    with _materialize_lock:
+        if numba is None:
+            numba = _import_numba()
+            _adopt_thread_pool()
+            prange = numba.prange
+        for deferred in _deferred:
+            if deferred._real is None:
+                deferred._real = deferred._make(numba)
+        placeholders = {id(deferred): (deferred, deferred._real) for deferred in _deferred}
+        placeholders[id(_PRANGE)] = (_PRANGE, numba.prange)
+        homes = {getattr(deferred.py_func, "__module__", None) for deferred in _deferred}
+        for name, module in list(sys.modules.items()):
+            if (name == "envconv" or name.startswith("envconv.") or name in homes) and name != __name__:
+                namespace = getattr(module, "__dict__", {})
+                for key, value in list(namespace.items()):
+                    placeholder, real = placeholders.get(id(value), (None, None))
+                    if value is placeholder:
+                        namespace[key] = real
+    return numba
+
+
+def _adopt_thread_pool() -> None:
+    """Tell numba about the thread pool and extension modules loaded without it, as numba's own
+    ``_launch_threads`` would have left them."""
+    cached = sys.modules.get("envconv._cached_kernels")
+    if cached is None or cached._runtime is None:
+        return
+    for name, module in list(sys.modules.items()):  # numba's packages now exist: link them
+        parent, _, child = name.rpartition(".")
+        if name.startswith("numba.") and parent in sys.modules and not hasattr(sys.modules[parent], child):
+            setattr(sys.modules[parent], child, module)
+    runtime = cached._runtime
+    if runtime.threading_layer is None:
+        return
+    from numba.np.ufunc import parallel
+
+    with parallel._backend_init_thread_lock:
+        if not parallel._is_initialized:
+            parallel._load_threading_functions(runtime.thread_library)
+            parallel._threading_layer = runtime.threading_layer
+            parallel._is_initialized = True
+
+
+class _Placeholder:
+    def __init__(self, name):
+        self.name = name
+
+    def __repr__(self):
+        return f"<deferred numba.{self.name}>"
+
+
+#: ``prange`` for kernel modules: numba's, or a placeholder that :func:`import_numba` replaces.
+_PRANGE = _Placeholder("prange")
+prange = _PRANGE if numba is None else numba.prange
 
 #: LLVM fast-math flags that are safe with inf/nan data.
 FASTMATH = {"nsz", "arcp", "contract", "afn", "reassoc"}
@@ -247,11 +391,20 @@ def _start_runtime(target_context, cache_dir) -> None:
         nrtdynmod.compile_nrt_functions = compile_nrt
 
 
+def _dispatcher(fn, **options):
+    """numba's dispatcher for ``fn``, loading from its cache the lean way; deferred while this
+    process defers numba."""
+
+    def make(numba_module):
+        dispatcher = numba_module.njit(cache=True, fastmath=set(FASTMATH), error_model="numpy", **options)
+        return _load_cached_without_refresh(dispatcher(fn))
+
+    return make(numba) if numba is not None else _Deferred(fn, make)
+
+
 def jit(fn):
     """Compile a scalar helper or serial kernel (inlined into its callers by LLVM)."""
-    return _load_cached_without_refresh(
-        numba.njit(cache=True, fastmath=set(FASTMATH), error_model="numpy")(fn)
-    )
+    return _dispatcher(fn)
 
 
 def jit_inline(fn):
@@ -261,13 +414,20 @@ def jit_inline(fn):
     count increment and decrement per array; in a per-sample loop that both threads share,
     that dominates the run time. Inlining removes the call and the reference counting.
     """
-    return _load_cached_without_refresh(
-        numba.njit(cache=True, fastmath=set(FASTMATH), error_model="numpy", inline="always")(fn)
-    )
+    return _dispatcher(fn, inline="always")
 
 
 def jit_parallel(fn):
     """Compile a kernel whose outer ``prange`` loop runs across all cores."""
-    return _load_cached_without_refresh(
-        numba.njit(cache=True, parallel=True, fastmath=set(FASTMATH), error_model="numpy")(fn)
-    )
+    return _dispatcher(fn, parallel=True)
+
+
+def intrinsic(fn):
+    """numba's ``@intrinsic`` (deferred while this process defers numba)."""
+
+    def make(numba_module):
+        from numba.core.extending import intrinsic as make_intrinsic
+
+        return make_intrinsic(fn)
+
+    return make(numba) if numba is not None else _Deferred(fn, make)

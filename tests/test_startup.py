@@ -331,7 +331,8 @@ def test_the_console_script_ends_alike_with_or_without_interpreter_teardown(tmp_
 _NUMBA_YAML_PROBE = (
     "import sys, envconv\n"
     "envconv._COMMAND_LINE_PROCESS = sys.argv[1] == 'cli'\n"
-    "import envconv._jit, numba\n"
+    "import envconv._jit\n"
+    "numba = envconv._jit.import_numba()\n"
     "print('yaml' in sys.modules, numba.config.NUMBA_NUM_THREADS)\n"
 )
 

@@ -5,9 +5,8 @@ mip kernels (:func:`output_sample`, :func:`source_point`). Geometry arrives as (
 see :mod:`envconv.kernels.cells`. Image points are level-0 pixels.
 """
 
-from numba import prange
 
-from .._jit import jit_inline, jit_parallel
+from .._jit import jit_inline, jit_parallel, prange
 from .cells import (
     GEO_FAMILY,
     cell_local,

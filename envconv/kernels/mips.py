@@ -11,9 +11,8 @@ same image area.
 """
 
 import numpy as np
-from numba import prange
 
-from .._jit import jit_parallel
+from .._jit import jit_parallel, prange
 from .resample import _store
 from .scratch import scratch
 

@@ -16,9 +16,8 @@ Tiles are in :mod:`envconv.kernels.tiles`, the auto sub-sample rule in
 import math
 
 import numpy as np
-from numba import prange
 
-from .._jit import jit_inline, jit_parallel
+from .._jit import jit_inline, jit_parallel, prange
 from .cells import GEO_FAMILY, cell_local
 from .footprint import (
     AUTO_EDGE_SAMPLES,

@@ -25,9 +25,8 @@ shifts by W_k / 2) or smaller than RIP_MIN_WIDTH.
 import math
 
 import numpy as np
-from numba import prange
 
-from .._jit import jit_inline, jit_parallel
+from .._jit import jit_inline, jit_parallel, prange
 
 __all__ = ["rip_level_count", "rip_offset", "build_rips", "level_tap", "rows_filled",
            "RIP_MAX_LEVELS", "RIP_ROW_MARGIN"]  # fmt: skip

@@ -9,8 +9,7 @@ passing working arrays in) also lets LLVM know they alias nothing else: with arr
 the resampling kernel ran 17–40 % slower.
 """
 
-from numba import types
-from numba.core.extending import intrinsic
+from .._jit import intrinsic
 
 __all__ = ["scratch"]
 
@@ -19,6 +18,8 @@ __all__ = ["scratch"]
 def scratch(typingctx, shape, dtype):
     """A new, uninitialised C-contiguous array of ``shape`` (an integer or a tuple of integers)
     and ``dtype`` (a numpy scalar type such as ``np.float64``), for use inside a kernel."""
+    from numba import types  # runs while compiling only, with numba imported
+
     if isinstance(shape, types.Integer):
         ndim = 1
     elif isinstance(shape, types.BaseTuple) and all(isinstance(t, types.Integer) for t in shape):
