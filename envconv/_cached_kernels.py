@@ -195,12 +195,9 @@ def _numba_dir() -> str | None:
 
 
 def _numba_version() -> str | None:
-    from importlib import metadata
+    from ._versions import installed_version
 
-    try:
-        return metadata.version("numba")
-    except metadata.PackageNotFoundError:
-        return None
+    return installed_version("numba")
 
 
 def unavailable_reason() -> str | None:

@@ -130,11 +130,13 @@ class BuiltinConfig:
 
 
 def _ocio_version() -> str | None:
-    from importlib import metadata
+    """OpenColorIO's installed version; None when it is not installed as a distribution
+    (conda, a build tree): then there is no table."""
+    from ._versions import installed_version
 
     try:
-        return metadata.version("opencolorio")
-    except Exception:  # not installed as a distribution (conda, a build tree): no table
+        return installed_version("opencolorio")
+    except Exception:
         return None
 
 

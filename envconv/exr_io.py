@@ -135,14 +135,13 @@ def _oiio_reading_known() -> bool:
     """Whether the installed OIIO is one whose reading :func:`_oiio_metadata` reproduces (its
     version from the installed distribution, so that OIIO need not be imported)."""
     oiio = sys.modules.get("OpenImageIO")
-    try:
-        if oiio is not None:
-            version = oiio.__version__
-        else:
-            from importlib import metadata
+    if oiio is not None:
+        version = getattr(oiio, "__version__", None)
+    else:
+        from ._versions import installed_version
 
-            version = metadata.version("OpenImageIO")
-    except Exception:  # not installed as a distribution: OIIO reads
+        version = installed_version("OpenImageIO")
+    if version is None:  # not installed as a distribution: OIIO reads
         return False
     return ".".join(str(version).split(".")[:2]) in _OIIO_READINGS_KNOWN
 
