@@ -104,7 +104,7 @@ def _deferring() -> bool:
 #: numba, once imported (at once, unless this process defers it: see :class:`_Deferred`).
 numba = None if _deferring() else _import_numba()
 
-__all__ = ["jit", "jit_inline", "jit_parallel", "intrinsic", "prange", "FASTMATH", "import_numba"]
+__all__ = ["jit", "jit_inline", "jit_parallel", "intrinsic", "prange", "FASTMATH", "import_numba", "preload"]
 
 _materialize_lock = threading.RLock()
 _deferred: list["_Deferred"] = []
@@ -191,6 +191,17 @@ def import_numba():
                     if value is placeholder:
                         namespace[key] = real
     return numba
+
+
+def preload(*kernels) -> None:
+    """Look up deferred kernels' cached machine code now rather than at their first call, for
+    a caller with time to spare (a one-shot command, while its input decodes on another
+    thread). Kernels numba already handles, and a process that imports numba, are left alone."""
+    for kernel in kernels:
+        if isinstance(kernel, _Deferred) and kernel._real is None and kernel._overloads is None:
+            from . import _cached_kernels
+
+            kernel._overloads = _cached_kernels.load(kernel.py_func) or ()
 
 
 def _adopt_thread_pool() -> None:

@@ -59,6 +59,20 @@ FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
 MAX_SAMPLES = 32
 
 
+def preload_kernels() -> None:
+    """Get the kernels every conversion runs ready ahead of the first one.
+
+    Only a process the command line runs, which loads numba's cached machine code without
+    numba (see ``envconv._jit``), has anything to do here: ``convert_file`` calls this before
+    reading its input, so that loading them overlaps decoding the input on another thread."""
+    from . import _jit
+    from .kernels.mapping import dir_density
+    from .kernels.resample import resample_rows
+    from .kernels.ripmap import _fill_rips
+
+    _jit.preload(resample_rows, _fill_rips, dir_density)
+
+
 def default_size(source: EnvMap, to: Layout | str) -> int:
     """Output N that keeps the source's horizon pitch (see module docstring)."""
     to = get_layout(to)
