@@ -257,3 +257,21 @@ def test_the_command_line_converts_without_numba(tmp_path):
         assert lines[-1] == "False"
         expected = envconv.convert(source, to=to, size=int(size), filter=reconstruction)
         np.testing.assert_array_equal(envconv.read(out).pixels, expected.pixels)
+
+
+def test_preloading_finds_the_conversion_kernels_without_numba():
+    """``preload_kernels`` (called before a one-shot convert reads its input) loads the
+    cached kernels a conversion runs, so that their first call finds them ready."""
+    source = envconv.EnvMap(np.ones((16, 32, 3), np.float32), "latlong")
+    envconv.convert(source, to="cube-vcross", size=8)  # cached here first
+    code = """
+    import sys
+    import envconv
+    envconv._COMMAND_LINE_PROCESS = True
+    from envconv.resample import preload_kernels
+    from envconv.kernels import mapping, resample, ripmap
+    preload_kernels()
+    kernels = (resample.resample_rows, ripmap._fill_rips, mapping.dir_density)
+    print(all(len(k._overloads) >= 1 for k in kernels), 'numba' in sys.modules)
+    """
+    assert _run(code) == ["True", "False"]
