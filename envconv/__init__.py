@@ -20,8 +20,9 @@ from .errors import ColorError, EnvconvError, ImageIOError, LayoutError, UsageEr
 __version__ = "0.1.0"
 
 #: True in a process that envconv's command line runs (set by ``envconv.cli.main.main``): its
-#: start-up may skip what a library import inside someone else's program must not (see
-#: ``envconv._jit._import_numba``).
+#: start-up may skip what a library import inside someone else's program must not: importing
+#: numba at all while its cached kernels serve (``envconv._jit``), and PyYAML with numba
+#: (``envconv._jit._import_numba``).
 _COMMAND_LINE_PROCESS = False
 
 __all__ = [

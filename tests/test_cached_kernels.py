@@ -234,15 +234,20 @@ def test_elf_symbols_of_a_cached_kernel(kernel_module):
 
 
 def test_the_command_line_converts_without_numba(tmp_path):
-    """The real thing: ``envconv convert`` and its kernels (resampling, rip-maps, densities) in
-    a fresh process, without numba, write what converting in this process gives."""
+    """The real thing: ``envconv convert`` and its kernels (resampling, rip-maps, densities,
+    alpha, guard rings, mips) in a fresh process, without numba, write what the same command
+    run in this process (by numba) writes."""
+    from conftest import run_cli
+
     rng = np.random.default_rng(4)
     source = envconv.EnvMap(rng.uniform(0, 50, (64, 128, 3)).astype(np.float32), "latlong")
     envconv.write(source, tmp_path / "src.exr", bit_depth="float")
-    source = envconv.read(tmp_path / "src.exr")
-    cases = [("cube-vcross", "16", "bilinear"), ("sphere", "24", "bicubic")]
-    for to, size, reconstruction in cases:  # numba compiles and caches them here first
-        envconv.convert(source, to=to, size=int(size), filter=reconstruction)
+    cases = [
+        ["--to", "cube-vcross", "--size", "16"],
+        ["--to", "sphere", "--size", "24", "--filter", "bicubic", "--alpha", "--rotate", "30,10,5"],
+        ["--to", "cube-hcross", "--size", "16", "--guard", "2", "--alpha", "--mips"],
+        ["--to", "paraboloid", "--size", "12", "--guard", "fill", "--samples", "3", "--filter", "nearest"],
+    ]
     code = """
     import atexit, sys
     from envconv.cli.main import main
@@ -250,13 +255,20 @@ def test_the_command_line_converts_without_numba(tmp_path):
     sys.argv = ['envconv', *sys.argv[1:]]
     main()
     """
-    for to, size, reconstruction in cases:
-        out = tmp_path / f"{to}.exr"
-        lines = _run(code, "convert", str(tmp_path / "src.exr"), str(out), "--to", to, "--size", size,
-                     "--filter", reconstruction)  # fmt: skip
-        assert lines[-1] == "False"
-        expected = envconv.convert(source, to=to, size=int(size), filter=reconstruction)
-        np.testing.assert_array_equal(envconv.read(out).pixels, expected.pixels)
+    for number, options in enumerate(cases):
+        expected, written = tmp_path / f"here{number}.exr", tmp_path / f"cli{number}.exr"
+        assert run_cli(["convert", tmp_path / "src.exr", expected, *options]).exit_code == 0  # caches
+        lines = _run(code, "convert", str(tmp_path / "src.exr"), str(written), *options)
+        assert lines[-1] == "False", options
+        np.testing.assert_array_equal(envconv.read(written).pixels, envconv.read(expected).pixels)
+        if "--mips" in options:  # the lower levels too, as stored
+            import OpenImageIO as oiio
+
+            for level in range(1, 4):
+                buffers = [oiio.ImageBuf(str(path), 0, level) for path in (written, expected)]
+                pixels = [b.get_pixels(oiio.FLOAT) for b in buffers]
+                assert not any(b.has_error for b in buffers) and pixels[0].size > 0
+                np.testing.assert_array_equal(*pixels)
 
 
 def test_preloading_finds_the_conversion_kernels_without_numba():
