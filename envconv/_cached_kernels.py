@@ -47,6 +47,15 @@ _EXTENSIONS = {
     "numba.core.runtime._nrt_python": "NRT_",
 }
 
+#: The C math functions numba binds, by their own names, to the addresses its helper library
+#: holds (numba.core.intrinsics.INTR_MATH, installed by numba.core.externals).
+_C_MATH = """
+acos acosf acosh acoshf asin asinf asinh asinhf atan atan2 atan2f atanf atanh atanhf ceil ceilf
+cos cosf cosh coshf exp expf expm1 expm1f fabs fabsf floor floorf fmod fmodf log log10 log10f
+log1p log1pf logf pow powf round roundf sin sinf sinh sinhf sqrt sqrtf tan tanf tanh tanhf
+trunc truncf
+""".split()
+
 #: Return types whose boxing needs nothing but the wrapper itself.
 _SCALAR_RETURNS = {"none", "bool", "int64", "int32", "float64", "float32"}
 
@@ -274,6 +283,10 @@ class _Runtime:
                     ll.add_symbol(py_name, address)  # NRT's internal API keeps its name
                 else:
                     ll.add_symbol(prefix + py_name, address)
+        helpers = self.modules["numba._helperlib"].c_helpers
+        for name in _C_MATH:
+            if name in helpers:
+                ll.add_symbol(name, helpers[name])
         import builtins
 
         for value in vars(builtins).values():

@@ -287,3 +287,10 @@ def test_preloading_finds_the_conversion_kernels_without_numba():
     print(all(len(k._overloads) >= 1 for k in kernels), 'numba' in sys.modules)
     """
     assert _run(code) == ["True", "False"]
+
+
+def test_the_c_math_names_are_numbas():
+    """The math functions bound by name, as numba binds them (its INTR_MATH)."""
+    from numba.core.intrinsics import INTR_MATH
+
+    assert set(_cached_kernels._C_MATH) == set(INTR_MATH)
