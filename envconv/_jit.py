@@ -108,6 +108,7 @@ __all__ = ["jit", "jit_inline", "jit_parallel", "intrinsic", "prange", "FASTMATH
 
 _materialize_lock = threading.RLock()
 _deferred: list["_Deferred"] = []
+_rebound = False  # import_numba has made every deferred object real
 
 
 class _Deferred:
@@ -143,15 +144,24 @@ class _Deferred:
             real = self._real
         return real(*args, **kwargs)
 
-    def _cached_call(self, args):
-        from . import _cached_kernels
-
+    def _cached_overloads(self):
+        """The kernel's specialisations in numba's cache, loaded on first use (empty: none
+        that can run without numba)."""
         if self._overloads is None:
+            from . import _cached_kernels
+
             self._overloads = _cached_kernels.load(self.py_func) or ()
-        if not self._overloads:
+        return self._overloads
+
+    def _cached_call(self, args):
+        """The cached specialisation for exactly these argument types, or None."""
+        overloads = self._cached_overloads()
+        if not overloads:
             return None
-        types = tuple(_cached_kernels.arg_type_name(value) for value in args)
-        for overload in self._overloads:
+        from ._cached_kernels import arg_type_name
+
+        types = tuple(arg_type_name(value) for value in args)
+        for overload in overloads:
             if overload.arg_types == types:
                 return overload.call
         return None
@@ -170,9 +180,13 @@ def import_numba():
     """Import numba (if this process deferred it) and make every deferred object real.
 
     Every global that names a deferred object, in envconv's modules and in the modules that
-    defined deferred kernels, is rebound to the real one. A thread pool that :mod:`envconv._cached_kernels` started becomes numba's own."""
-    global numba, prange
+    defined deferred kernels, is rebound to the real one. A thread pool that
+    :mod:`envconv._cached_kernels` started becomes numba's own. Once done, this returns at once
+    (no object is deferred once numba is imported)."""
+    global numba, prange, _rebound
     with _materialize_lock:
+        if _rebound:
+            return numba
         if numba is None:
             numba = _import_numba()
             _adopt_thread_pool()
@@ -190,6 +204,7 @@ def import_numba():
                     placeholder, real = placeholders.get(id(value), (None, None))
                     if value is placeholder:
                         namespace[key] = real
+        _rebound = True
     return numba
 
 
@@ -198,10 +213,8 @@ def preload(*kernels) -> None:
     a caller with time to spare (a one-shot command, while its input decodes on another
     thread). Kernels numba already handles, and a process that imports numba, are left alone."""
     for kernel in kernels:
-        if isinstance(kernel, _Deferred) and kernel._real is None and kernel._overloads is None:
-            from . import _cached_kernels
-
-            kernel._overloads = _cached_kernels.load(kernel.py_func) or ()
+        if isinstance(kernel, _Deferred) and kernel._real is None:
+            kernel._cached_overloads()
 
 
 def _adopt_thread_pool() -> None:
