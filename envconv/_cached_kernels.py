@@ -25,6 +25,7 @@ command line runs; numba's internals read here are those of the versions in
 from __future__ import annotations
 
 import ctypes
+import functools
 import hashlib
 import importlib.machinery
 import importlib.util
@@ -446,6 +447,14 @@ def load(py_func) -> list[Overload] | None:
             return None
 
 
+@functools.cache
+def _source_hash(path: str, mtime: float, size: int) -> bytes:
+    """sha256 of a kernel's source file, numba's cache stamp; read once per file version (a
+    module holds several kernels), as numba's ``_hash_source_file`` does."""
+    with open(path, "rb") as f:
+        return hashlib.sha256(f.read()).digest()
+
+
 def _load(runtime: _Runtime, py_func, directory: str, index_name: str) -> list[Overload] | None:
     with open(os.path.join(directory, index_name), "rb") as f:
         version = pickle.load(f)
@@ -453,9 +462,10 @@ def _load(runtime: _Runtime, py_func, directory: str, index_name: str) -> list[O
     if version != runtime.version:
         return None
     stamp, overloads = _unpickle(index)
-    with open(py_func.__code__.co_filename, "rb") as f:
-        if stamp != hashlib.sha256(f.read()).digest():
-            return None
+    source = py_func.__code__.co_filename
+    status = os.stat(source)
+    if stamp != _source_hash(source, status.st_mtime, status.st_size):
+        return None
     code_hashes = (
         hashlib.sha256(py_func.__code__.co_code).hexdigest(),
         hashlib.sha256(b"").hexdigest(),
@@ -497,7 +507,7 @@ def _overload(runtime: _Runtime, directory: str, arg_types, payload) -> Overload
         return None
     for e in environments:
         module_name, _consts, env_name = e.args
-        runtime.keep_alive.append(runtime.environment(module_name, env_name))
+        runtime.environment(module_name, env_name)  # kept alive by the runtime
     address = runtime.engine.get_function_address("_ZN7cpython" + mangled[3:])
     if not address:
         return None
