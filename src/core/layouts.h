@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace envconv {
 
@@ -38,6 +39,16 @@ struct FacePoint {
     int face;
     double a, b;
 };
+
+// floor(x) as an index, without a libm call on the x86-64 baseline (which lacks roundsd).
+// x is clamped to +-2^60 first (NaN to -2^60): far outside every image, so a caller's bounds
+// checks send such values to the clamped slow path.
+inline int64_t floor_index(double x) {
+    constexpr double kFar = 1152921504606846976.0;  // 2^60
+    x = std::min(kFar, std::max(-kFar, x));          // NaN compares false: -2^60
+    int64_t i = int64_t(x);
+    return i - int64_t(x < double(i));
+}
 
 inline Vec3 normalized(double x, double y, double z) {
     double inv = 1.0 / std::sqrt(x * x + y * y + z * z);
