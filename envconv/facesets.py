@@ -26,7 +26,8 @@ set             files (in envconv slots px nx py ny pz nz)  faces
 ``unity-6sided`` left right up down front back          as is (Skybox/6 Sided)
 ``threejs``     px nx py ny pz nz                       as is (CubeTextureLoader, x flipped)
 ``godot``       x- x+ y+ y- z+ z-  (X+ holds world +X)  every face mirrored left-right
-``unreal``      posz negz posy negy posx negx           ±X, ±Z mirrored; ±Y transposed
+``unreal``      posy negy posz negz posx negx           posy turned 180°, negy as is, the
+                                                        other four turned a quarter turn
 =============== ======================================= ====================================
 
 ``quake`` is also Quake II/III (ioquake3), Half-Life (GoldSrc), Source and Cube 2: Sauerbraten,
@@ -135,9 +136,9 @@ _FACE_SET_LIST = (
     ),
     FaceSet(
         "unreal",
-        "Unreal TextureCube faces PosX..NegZ as its long-lat importer fills them (Z up, LH)",
-        ("posz", "negz", "posy", "negy", "posx", "negx"),
-        (_MIRROR, _MIRROR, (0, 1, 1, 0), (0, -1, -1, 0), _MIRROR, _MIRROR),
+        "Unreal TextureCube faces PosX..NegZ (D3D faces sampled with UE's Z-up LH world vector)",
+        ("posy", "negy", "posz", "negz", "posx", "negx"),
+        ((-1, 0, 0, -1), _I, (0, -1, 1, 0), (0, -1, 1, 0), (0, -1, 1, 0), (0, 1, -1, 0)),
         aliases=("ue", "ue4", "ue5"),
         file_order=("posx", "negx", "posy", "negy", "posz", "negz"),
     ),

@@ -111,10 +111,11 @@ FORMULAS = {
                                      lambda c: (-c[0], c[1], c[2])),  # fmt: skip
     # Godot Cubemap docs: X+ X- Y+ Y- Z+ Z- sampled with texture(cube, EYEDIR); Y-up RH world.
     "godot": lambda: gl_faces(("x+", "x-", "y+", "y-", "z+", "z-"), lambda c: c),
-    # Unreal TextureCompressorModule: face vector swizzled (X, Z, Y) to the Z-up LH world L;
+    # Unreal: the D3D face vector is the Z-up LH world vector L (CalcCubeFaceViewRotationMatrix
+    # renders +X with up +Y; the long-lat importer swizzles L only to feed a Y-up formula);
     # L to envconv by (x, y, z) -> (-y, z, x).
     "unreal": lambda: gl_faces(("posx", "negx", "posy", "negy", "posz", "negz"),
-                               lambda c: (-c[2], c[1], c[0])),  # fmt: skip
+                               lambda c: (-c[1], c[2], c[0])),  # fmt: skip
 }
 SETS = list(FORMULAS)
 
