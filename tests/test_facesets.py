@@ -378,3 +378,20 @@ def test_cli_layouts_lists_face_sets():
     for name in envconv.facesets.face_set_names():
         assert any(line.startswith(name + " ") for line in result.stdout.splitlines()), name
     assert "rt bk lf ft up dn" in result.stdout
+
+
+def test_pipeline_steps_take_face_sets(tmp_path):
+    from envconv.pipeline import Pipeline, Read, Resample, Write
+
+    template = write_files(tmp_path, render_files(quake_faces(), N))
+    out = str(tmp_path / "ue_{face}.exr")
+    pipeline = Pipeline([Read(template, faces="quake"), Resample("cube-faces", size=N, samples=1),
+                         Write(out, faces="unreal", bit_depth="float")])  # fmt: skip
+    planned = pipeline.output_files()
+    assert sorted(planned) == sorted(out.replace("{face}", k) for k in FORMULAS["unreal"]())
+    pipeline.run()
+    got = read_files(out, FORMULAS["unreal"]())
+    for key, image in render_files(FORMULAS["unreal"](), N).items():
+        np.testing.assert_allclose(got[key], image, rtol=1e-6, atol=1e-6, err_msg=key)
+    info = run_cli(["info", template])
+    assert info.exit_code == 0, info.stderr
