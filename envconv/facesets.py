@@ -171,21 +171,20 @@ def get_face_set(name: str | FaceSet) -> FaceSet:
     raise UsageError(f"unknown face set {name!r}{hint} (known: {', '.join(FACE_SETS)})")
 
 
-def _indices(size: int, transform) -> tuple[np.ndarray, np.ndarray]:
-    """Row and column index grids (size × size) that gather envconv's face into the file's."""
-    t00, t01, t10, t11 = transform
-    j, i = np.mgrid[0:size, 0:size]  # file pixel (row j, column i); a ∝ 2i - (size-1)
-    a, b = 2 * i - (size - 1), 2 * j - (size - 1)
-    a2, b2 = t00 * a + t01 * b, t10 * a + t11 * b
-    return (b2 + size - 1) // 2, (a2 + size - 1) // 2
-
-
 def face_to_file(face: np.ndarray, transform) -> np.ndarray:
-    """The file image of one envconv face image (H = W, any channels), by its T."""
+    """The file image of one envconv face image (H = W, any channels), by its T.
+
+    file(a, b) = face(T (a, b)): a flip of the columns and/or rows, after a transpose when T
+    swaps a and b. The result is a contiguous copy (or ``face`` itself for the identity).
+    """
     if tuple(transform) == _I:
         return face
-    rows, cols = _indices(_square(face), transform)
-    return face[rows, cols]
+    _square(face)
+    t00, t01, t10, t11 = transform
+    if t01 == 0:  # a' = t00 a, b' = t11 b
+        return np.ascontiguousarray(face[::t11, ::t00])
+    swapped = face.swapaxes(0, 1)  # a' = t01 b, b' = t10 a
+    return np.ascontiguousarray(swapped[::t01, ::t10])
 
 
 def file_to_face(image: np.ndarray, transform) -> np.ndarray:
