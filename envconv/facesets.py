@@ -108,7 +108,7 @@ _FACE_SET_LIST = (
         "Quake II/III, ioquake3, Half-Life (GoldSrc), Source, Cube 2: Sauerbraten, DarkPlaces",
         ("lf", "rt", "up", "dn", "ft", "bk"),
         (_I, _I, (0, -1, 1, 0), (0, 1, -1, 0), _I, _I),
-        aliases=("quake2", "quake3", "ioquake3", "source", "halflife", "goldsrc", "cube2",
+        aliases=("source", "cube2", "halflife", "goldsrc", "quake2", "quake3", "ioquake3",
                  "sauerbraten", "darkplaces"),  # fmt: skip
         file_order=("rt", "bk", "lf", "ft", "up", "dn"),
     ),

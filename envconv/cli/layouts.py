@@ -30,6 +30,8 @@ def layouts_command():
     click.echo("")
     click.echo("face sets of cube-faces (--in-convention / --out-convention NAME):")
     width = max(len(name) for name in FACE_SETS)
+    files = {name: " ".join(s.order()) for name, s in FACE_SETS.items()}
+    fwidth = max(len(text) for text in files.values())
     for name, face_set in FACE_SETS.items():
-        also = f" (also {', '.join(face_set.aliases[:4])})" if face_set.aliases else ""
-        click.echo(f"{name:<{width}}  {' '.join(face_set.order())}  {face_set.tool}{also}")
+        also = f" (also {', '.join(face_set.aliases)})" if face_set.aliases else ""
+        click.echo(f"{name:<{width}}  {files[name]:<{fwidth}}  {face_set.tool}{also}")
