@@ -91,7 +91,7 @@ RESAMPLE = [
     ("rotate", click.option("--rotate", metavar="YAW,PITCH,ROLL", help="Rotate the environment, degrees: about +Y, then +X, then +Z (right-hand rule).")),
     ("alpha", click.option("--alpha", is_flag=True, help="Add an alpha channel: each pixel's coverage of the valid region.")),
     ("guard", click.option("--guard", default=None, callback=parse_guard, metavar="G|fill", help="Guard ring of G pixels around every cell, or 'fill' for the whole image.")),
-    ("in_convention", click.option("--in-convention", "in_convention", metavar="NAME|AXES", help="Convention of the tool that made the input: blender, cmft, skylibs, unity, unreal, ffmpeg, openexr, probe-back, probe-forward, or an axis remap like -x,z,y (see docs/conventions.md).")),
+    ("in_convention", click.option("--in-convention", "in_convention", metavar="NAME|AXES", help="Convention of the tool that made the input: blender, cmft, skylibs, unity, unreal, ffmpeg, openexr, probe-back, probe-forward, pbrt, ddgi, ddgi-z-up, or an axis remap like -x,z,y (see docs/conventions.md).")),
     ("out_convention", click.option("--out-convention", "out_convention", metavar="NAME|AXES", help="Convention of the tool that will read the output (same names as --in-convention).")),
     ("up", click.option("--up", type=click.Choice(["y", "z"], case_sensitive=False), help="Up axis of the input's world; z turns its +Z into +Y (same as --axes=x,z,-y).")),
     ("axes", click.option("--axes", metavar="AXES", help="Remap the input's axes by a signed permutation: --axes=-x,z,y makes envconv's (x, y, z) the input's (-x, z, y).")),
