@@ -35,12 +35,14 @@ SHARED = [
     ((0.25, 0.25), (-R2, 0, R2)), ((0.75, 0.25), (R2, 0, R2)),
     ((0.25, 0.75), (-R2, 0, -R2)), ((0.75, 0.75), (R2, 0, -R2)),
 ]  # fmt: skip
-# Half way from the centre to the right edge: 45° up for the octahedron, asin(3/4) for the
-# equal-area square (z = 1 − r², r = 1/2); and the lower hemisphere's half way to a corner.
+# Half way from the centre to the right edge, and from (X − Z)/√2 to the corner: the octahedron
+# points (1/2, 0, 1/2) and (1/4, 1/4, −1/2) of the papers' frame, or for the equal-area square
+# the L1 radius r = 1/2, so |y| = 1 − r² = 3/4.
+S = math.sqrt(1 - 0.75**2)
 OWN = {
-    "octahedral": [((0.75, 0.5), (R2, R2, 0)), ((0.875, 0.875), (R2, -R2, 0))],
-    "equal-area": [((0.75, 0.5), (math.sqrt(1 - 0.75**2), 0.75, 0)),
-                   ((0.875, 0.875), (math.sqrt(1 - 0.75**2), -0.75, 0))],
+    "octahedral": [((0.75, 0.5), (R2, R2, 0)),
+                   ((0.875, 0.875), np.array([1, -2, -1]) / math.sqrt(6))],
+    "equal-area": [((0.75, 0.5), (S, 0.75, 0)), ((0.875, 0.875), (S * R2, -0.75, -S * R2))],
 }  # fmt: skip
 
 
@@ -115,9 +117,9 @@ def test_every_equal_area_pixel_subtends_4pi_over_n2(n):
     areas = (4 * fine - coarse) / 3
     np.testing.assert_allclose(areas, 4 * math.pi / n**2, rtol=1e-6)
     np.testing.assert_allclose(pixel_solid_angles("equal-area", n), 4 * math.pi / n**2, rtol=1e-12)
-    # The octahedral square is not equal-area: its pixels differ by up to about 3√3 ≈ 5.
+    # The octahedral square is not equal-area: its density varies fivefold (1 to 3√3).
     octa = (4 * _pixel_areas("octahedral", n, 64) - _pixel_areas("octahedral", n, 32)) / 3
-    assert octa.max() / octa.min() > 2.5
+    assert octa.max() / octa.min() > 2
     np.testing.assert_allclose(pixel_solid_angles("octahedral", n, samples=8), octa, rtol=3e-3)
 
 
@@ -172,8 +174,10 @@ def smooth_latlong():
 
 def test_envconv_writes_the_square_makeequiarea_writes(smooth_latlong):
     """Same lat-long, same sub-sample points: envconv's solid-angle mean over each pixel is the
-    plain mean, as in makeequiarea with a box filter. makeequiarea's own Gaussian (radius 1.5
-    px) blurs a little more; a transposed or unconverted square is far off."""
+    plain mean, as in makeequiarea with a box filter. The difference left is the core's tile
+    interpolation (sub-sample positions within 0.01 source texel, src/core/tiles.h), plus pbrt's
+    clamp at the lat-long's first and last half-row. makeequiarea's own Gaussian (radius 1.5 px)
+    blurs a little more; a transposed or unconverted square is far off."""
     n, s = 96, 4
     sky = envconv.EnvMap(smooth_latlong.astype(np.float32), "latlong")
     ours = envconv.convert(sky, "equal-area", size=n, samples=s, out_convention="pbrt").pixels
@@ -183,14 +187,14 @@ def test_envconv_writes_the_square_makeequiarea_writes(smooth_latlong):
     d = ports.equal_area_square_to_sphere(np.stack(np.meshgrid((np.arange(n) + 0.5) / n,
                                                                (np.arange(n) + 0.5) / n), -1))  # fmt: skip
     away = np.abs(d[..., 2]) < math.cos(1.5 * math.pi / 64)
-    assert np.abs(ours - box)[away].max() < 2e-5 * np.abs(box).max()
-    assert rel_rms(ours, box) < 2e-4
+    assert np.abs(ours - box)[away].max() < 5e-4 * np.abs(box).max()
+    assert rel_rms(ours, box) < 1e-4
     gaussian = ports.make_equiarea(smooth_latlong, n, samples=8)
     blur = rel_rms(ours, gaussian)
-    assert blur < 1e-2
+    assert blur < 2e-3
     native = envconv.convert(sky, "equal-area", size=n, samples=s).pixels
-    assert rel_rms(native, box) > 20 * blur
-    assert rel_rms(np.swapaxes(ours, 0, 1), box) > 20 * blur
+    assert rel_rms(native, box) > 100 * blur
+    assert rel_rms(np.swapaxes(ours, 0, 1), box) > 100 * blur
 
 
 def test_pbrt_square_reads_back_as_pbrt_reads_it(smooth_latlong):
@@ -214,7 +218,7 @@ def test_cli_convert_to_pbrt_and_back(tmp_path, smooth_latlong):
     """The issue's command: the file is as wide as the lat-long, pixel centres read from it as
     makeequiarea's own points, and it reads back with --from equal-area --in-convention pbrt."""
     sky = tmp_path / "sky.exr"
-    write_plain(sky, smooth_latlong, {"envmap": "latlong"})
+    write_plain(sky, smooth_latlong)
     out = tmp_path / "sky_ea.exr"
     result = run_cli(["convert", sky, out, "--to", "equal-area", "--out-convention", "pbrt"])
     assert result.exit_code == 0, result.stderr
