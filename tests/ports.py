@@ -3,8 +3,9 @@
 Nothing here calls envconv. Each function restates, vectorised, what the cited source does, so
 that tests can check envconv's octahedral layouts and presets against the tools themselves.
 
-pbrt-v4 (github.com/mmp/pbrt-v4, Apache-2.0), read at commit 5359d2e3 of ``src/pbrt/util/math.cpp``
-and 9e32a442 of ``src/pbrt/cmd/imgtool.cpp``:
+pbrt-v4 (github.com/mmp/pbrt-v4, Apache-2.0), read at commits 5359d2e3 of
+``src/pbrt/util/math.cpp`` (revision 015ab470 computes the same with ApproxSin/ApproxCos),
+00aad0a6 of ``src/pbrt/cmd/imgtool.cpp`` and 033e6d99 of ``src/pbrt/util/image.h``:
 
 - ``EqualAreaSquareToSphere(p)``: Clarberg's mapping. p ∈ [0, 1]², (u, v) = 2p − 1; with the
   L1 distance s = 1 − (|u| + |v|) from the diagonal, r = 1 − |s|, φ = ((|v| − |u|)/r + 1) π/4
