@@ -133,8 +133,9 @@ class Walk:
         else:
             env = None
             size = kwargs.get("size") or default_size(
-                SimpleNamespace(size=self.source.size, layout=self.source.layout), layout
-            )
+                SimpleNamespace(size=self.source.size, layout=self.source.layout), layout,
+                kwargs.get("out_convention"),
+            )  # fmt: skip
         width, height = layout.file_size(size, guard)
         levels = count_levels(width, height, mips)
         record = Output(self.input, layout.name, int(size), guard, width, height, levels)

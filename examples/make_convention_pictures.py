@@ -30,6 +30,8 @@ PICTURES = [
     ("envconv-cube-exr", "cube-exr", 64, None),
     ("envconv-sphere", "sphere", 200, None),
     ("envconv-angular", "angular", 200, None),
+    ("envconv-octahedral", "octahedral", 200, None),
+    ("envconv-equal-area", "equal-area", 200, None),
     ("blender-latlong", "latlong", 160, "blender"),
     ("skylibs-latlong", "latlong", 160, "skylibs"),
     ("skylibs-cube-vcross", "cube-vcross", 80, "skylibs"),
@@ -40,6 +42,8 @@ PICTURES = [
     ("ffmpeg-latlong", "latlong", 160, "ffmpeg"),
     ("ffmpeg-cube-hstrip", "cube-hstrip", 64, "ffmpeg"),
     ("openexr-cube-hstrip", "cube-hstrip", 64, "openexr"),
+    ("pbrt-equal-area", "equal-area", 200, "pbrt"),
+    ("ddgi-octahedral", "octahedral", 200, "ddgi"),
 ]
 
 
