@@ -16,13 +16,15 @@ bytes do not depend on the thread count.
 from __future__ import annotations
 
 import os
+import threading
+from collections.abc import Callable
 
 import numpy as np
 
 from . import _core
 
 __all__ = [
-    "get_threads", "set_threads", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
+    "get_threads", "set_threads", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
     "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
@@ -70,6 +72,48 @@ def set_threads(count: int | None) -> int:
     return previous
 
 
+#: Called as ``watcher(done, total)`` with the bands of output rows finished, about 5 times a
+#: second, while a resampling kernel runs (see :func:`watch_progress`).
+_watcher: Callable[[int, int], None] | None = None
+
+
+def watch_progress(watcher: Callable[[int, int], None] | None):
+    """Report the progress of every resampling call to ``watcher(done, total)`` (None: stop);
+    returns the previous watcher.
+
+    With a watcher the kernel runs on a helper thread while the calling thread polls its
+    counter of finished bands (the GIL is released inside the kernel), so a command line can
+    draw a progress line; without one, nothing changes.
+    """
+    global _watcher
+    previous, _watcher = _watcher, watcher
+    return previous
+
+
+def _run_watched(call, total: int) -> None:
+    """Run ``call(progress)`` on a helper thread, reporting ``progress[0]`` to the watcher."""
+    watcher = _watcher
+    if watcher is None:
+        call(None)
+        return
+    progress = np.zeros(1, np.int64)
+    failure: list[BaseException] = []
+
+    def work() -> None:
+        try:
+            call(progress)
+        except BaseException as exc:  # re-raised in the calling thread
+            failure.append(exc)
+
+    worker = threading.Thread(target=work, name="envconv-kernel", daemon=True)
+    worker.start()
+    while worker.is_alive():
+        worker.join(0.2)
+        watcher(int(progress[0]), total)
+    if failure:
+        raise failure[0]
+
+
 def _c(array, dtype) -> np.ndarray:
     return np.ascontiguousarray(array, dtype)
 
@@ -94,11 +138,13 @@ def resample_rows(
     output directions to source directions; ``scale_x``, ``scale_y`` are level-0 output pixels
     per pixel of ``out`` (1 for level 0 of a mip chain).
     """
-    _core.resample(
+    args = (
         _c(src, np.float32), _c(rip, np.float32), int(rip_levels), int(rip_rows),
         *_geo(sgeometry), *_geo(dgeometry), float(scale_x), float(scale_y), int(samples),
         int(filt), _c(rot, np.float64), bool(fill), out, alpha, weights, _threads,
     )  # fmt: skip
+    bands = (out.shape[0] + TILE - 1) // TILE
+    _run_watched(lambda progress: _core.resample(*args, progress), bands)
 
 
 def rip_level_count(width: int) -> int:

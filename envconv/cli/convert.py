@@ -43,10 +43,13 @@ def convert_command(input_path, output_path, dry_run, **options):
         plan = plan_convert(input_path, output_path, read_kw, resample_kw, write_kw, color_kw)
         _echo_plan(plan)
         return
+    from .progress import ResampleProgress
+
     warnings: list[str] = []
     try:
-        paths = convert_file(input_path, output_path, read=read_kw, resample=resample_kw,
-                             write=write_kw, color=color_kw, warnings=warnings)  # fmt: skip
+        with ResampleProgress():
+            paths = convert_file(input_path, output_path, read=read_kw, resample=resample_kw,
+                                 write=write_kw, color=color_kw, warnings=warnings)  # fmt: skip
     finally:
         for message in warnings:
             click.echo(f"envconv: warning: {message}", err=True)

@@ -1,4 +1,5 @@
-"""Progress of a batch on stderr: a bar with ETA on a terminal, plain log lines otherwise."""
+"""Progress on stderr: a batch's bar with ETA (plain log lines off a terminal), and a single
+conversion's resampling line on a terminal once it has run for 2 s."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ from typing import Any
 
 import click
 
-__all__ = ["Progress", "format_seconds", "summary_line"]
+__all__ = ["Progress", "ResampleProgress", "format_seconds", "summary_line"]
 
 
 def format_seconds(seconds: float) -> str:
@@ -90,3 +91,45 @@ class Progress:
     def close(self) -> None:
         if self.tty and self._drawn:
             click.echo("", err=True)
+
+
+class ResampleProgress:
+    """A context manager that draws ``envconv: resampling 45%`` on a terminal while a long
+    conversion resamples: only on a terminal (a pipe or a log stays quiet), only once the
+    command has run for ``delay`` seconds, redrawn in place and erased at the end.
+
+    It watches the kernels' progress counter (:func:`envconv.kernels.watch_progress`).
+    """
+
+    def __init__(self, delay: float = 2.0, tty: bool | None = None) -> None:
+        self.delay = delay
+        self.tty = _isatty() if tty is None else tty
+        self.start = time.perf_counter()
+        self._drawn = False
+        self._previous = None
+
+    def __enter__(self) -> ResampleProgress:
+        if self.tty:
+            from ..kernels import watch_progress
+
+            self._previous = watch_progress(self.update)
+        return self
+
+    def update(self, done: int, total: int) -> None:
+        elapsed = time.perf_counter() - self.start
+        if elapsed < self.delay or total <= 0:
+            return
+        percent = int(100 * done / total)
+        sys.stderr.write(f"\renvconv: resampling {percent:3d}% ({format_seconds(elapsed)})")
+        sys.stderr.flush()
+        self._drawn = True
+
+    def __exit__(self, *exc: Any) -> None:
+        if not self.tty:
+            return
+        from ..kernels import watch_progress
+
+        watch_progress(self._previous)
+        if self._drawn:
+            sys.stderr.write("\r\033[K")
+            sys.stderr.flush()

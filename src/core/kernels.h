@@ -27,9 +27,10 @@ struct RipMap {
 };
 
 // Fill `out` with the resampled environment; see envconv/resample.py for the rules.
-// samples <= 0 asks for adaptive sampling.
+// samples <= 0 asks for adaptive sampling. `progress`, when not null, counts the bands of
+// kTile output rows finished (atomically), for a watcher on another thread.
 void resample(const Image& src, const RipMap& rip, const Conversion& cv, int samples, int filter,
-              const ResampleOutput& out, int threads);
+              const ResampleOutput& out, int threads, int64_t* progress = nullptr);
 
 // Fill rows [0, rows) and [H - rows, H) of the packed rip-map `out` (H, W - W_K, C) from `src`.
 void fill_rips(const Image& src, int levels, int64_t rows, float* out, int threads);

@@ -57,7 +57,8 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
               TableArray d_cell_face, TableArray d_cell_turns, TableArray d_face_cell,
               double scale_x, double scale_y, int samples, int filter,
               Array<const double, nb::shape<3, 3>> rot, bool fill, Array<float, nb::ndim<3>> out,
-              Array<float, nb::ndim<2>> alpha, Array<double, nb::ndim<2>> weights, int threads) {
+              Array<float, nb::ndim<2>> alpha, Array<double, nb::ndim<2>> weights, int threads,
+              Array<int64_t, nb::shape<1>> progress) {
     envconv::Conversion cv;
     cv.src = make_geometry(sgeo, s_cell_face, s_cell_turns, s_face_cell);
     cv.dst = make_geometry(dgeo, d_cell_face, d_cell_turns, d_face_cell);
@@ -85,8 +86,9 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
                               has_alpha ? alpha.data() : nullptr,
                               has_weights ? weights.data() : nullptr};
     envconv::Image image = make_image(src);
+    int64_t* counter = progress.is_valid() ? progress.data() : nullptr;
     nb::gil_scoped_release release;
-    envconv::resample(image, rips, cv, samples, filter, o, threads);
+    envconv::resample(image, rips, cv, samples, filter, o, threads, counter);
 }
 
 void fill_rips(Array<const float, nb::ndim<3>> src, int levels, int64_t rows,
@@ -246,7 +248,8 @@ NB_MODULE(_core, m) {
     m.def("resample", &resample, "src"_a, "rip"_a, "rip_levels"_a, "rip_rows"_a, "sgeo"_a,
           "s_cell_face"_a, "s_cell_turns"_a, "s_face_cell"_a, "dgeo"_a, "d_cell_face"_a,
           "d_cell_turns"_a, "d_face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "filter"_a,
-          "rot"_a, "fill"_a, "out"_a, "alpha"_a.none(), "weights"_a.none(), "threads"_a);
+          "rot"_a, "fill"_a, "out"_a, "alpha"_a.none(), "weights"_a.none(), "threads"_a,
+          "progress"_a.none() = nb::none());
     m.def("fill_rips", &fill_rips, "src"_a, "levels"_a, "rows"_a, "out"_a, "threads"_a);
     m.def("reduce_blocks", &reduce_blocks, "src"_a, "wsrc"_a, "asrc"_a, "bx"_a, "by"_a, "out"_a,
           "wout"_a, "aout"_a, "threads"_a);
@@ -264,7 +267,7 @@ NB_MODULE(_core, m) {
     m.def("filtered_reads", &filtered_reads, "src"_a, "geo"_a, "cell_face"_a, "cell_turns"_a,
           "face_cell"_a, "cells"_a, "points"_a, "filter"_a, "out"_a);
     m.def("level_reads", &level_reads, "rip"_a, "start"_a, "level_width"_a, "points"_a, "out"_a);
-    m.attr("TILE") = envconv::kTile;
+    m.attr("TILE") = envconv::kTile;  // output rows per band: the progress counter's unit
     m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;
     m.attr("AUTO_MAX_SAMPLES") = envconv::kAutoMaxSamples;
     m.attr("AUTO_EDGE_SAMPLES") = envconv::kAutoEdgeSamples;

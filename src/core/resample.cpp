@@ -392,7 +392,7 @@ void resample_band(const Job& job, int64_t band, Scratch& scratch) {
 }  // namespace
 
 void resample(const Image& src, const RipMap& rip, const Conversion& cv, int samples, int filter,
-              const ResampleOutput& out, int threads) {
+              const ResampleOutput& out, int threads, int64_t* progress) {
     const Geometry& d = cv.dst;
     bool adaptive = samples <= 0;
     bool fast_taps = filter == kBilinear && !cv.src.disk();
@@ -413,6 +413,7 @@ void resample(const Image& src, const RipMap& rip, const Conversion& cv, int sam
     parallel_for(bands, threads, [&](int64_t band) {
         Scratch scratch(out.channels);
         resample_band(job, band, scratch);
+        if (progress) __atomic_add_fetch(progress, 1, __ATOMIC_RELAXED);
     });
 }
 
