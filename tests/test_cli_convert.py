@@ -141,3 +141,17 @@ def test_real_process_error_and_success(tmp_path, sky):
     )  # fmt: skip
     assert ok.returncode == 0, ok.stderr
     assert envconv.read(tmp_path / "o.exr").layout.name == "sphere"
+
+
+def test_threads_option_gives_the_same_file(tmp_path, sky):
+    """--threads 1 and --threads 3 resample alike, byte for byte; --threads 0 is a usage error."""
+    outs = []
+    for threads in (1, 3):
+        out = tmp_path / f"t{threads}.exr"
+        result = run_cli(["--threads", threads, "convert", sky, out, "--to", "angular",
+                          "--size", 24, "--samples", 3, "--alpha"])  # fmt: skip
+        assert result.exit_code == 0, result.stderr
+        outs.append(envconv.read(out).pixels)
+    assert outs[0].tobytes() == outs[1].tobytes()
+    bad = run_cli(["--threads", 0, "convert", sky, tmp_path / "x.exr", "--to", "angular"])
+    assert bad.exit_code == 2 and len(stderr_lines(bad)) == 1

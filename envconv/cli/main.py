@@ -164,7 +164,9 @@ class EnvconvGroup(click.Group):
 )
 @click.version_option(__version__, prog_name="envconv")
 @click.option("-v", "--verbose", count=True, help="More log output (-vv for debug).")
-def cli(verbose: int) -> None:
+@click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
+              help="Threads for resampling (default: ENVCONV_THREADS, else one per core).")
+def cli(verbose: int, threads: int | None) -> None:
     """Convert HDR environment maps between layouts.
 
     \b
@@ -175,16 +177,22 @@ def cli(verbose: int) -> None:
 
     Chained steps: read, rotate, exposure, colorspace, resample, write. Each resample starts
     from the source (the last read and the steps that follow it), never from another output.
+    Options of envconv itself (-v, --threads) come before the command:
+    envconv --threads 1 convert ...
     """
     level = logging.WARNING - 10 * min(verbose, 2)
     for number in (logging.DEBUG, logging.INFO, logging.WARNING, logging.ERROR):
         # "envconv: warning: …" whether a message comes from the library's log or the CLI.
         logging.addLevelName(number, logging.getLevelName(number).lower())
     logging.basicConfig(level=level, format="envconv: %(levelname)s: %(message)s")
+    if threads is not None:
+        from ..kernels import set_threads
+
+        set_threads(threads)
 
 
 @cli.result_callback()
-def compose_steps(results, verbose: int) -> None:
+def compose_steps(results, verbose: int, threads: int | None) -> None:
     """Run the steps of a chain (standalone commands return None and have already run)."""
     steps = [r for r in results if r is not None]
     if steps:
