@@ -8,6 +8,7 @@ Run by hand and quote the figures; nothing here is a test.
     python benchmarks/bench.py batch        # envconv batch of 20 such files, -j 1 and -j 2
     python benchmarks/bench.py mips         # a whole mip chain against level 0 alone
     python benchmarks/bench.py versus TREE  # e2e, interleaved, against another checkout
+                                            # (pure-Python trees, put on PYTHONPATH)
     python benchmarks/bench.py targets --baseline PYTHON --peer PYTHON [--rows ...]
                                             # issue 14's table: this build, another build's
                                             # venv and py360convert + OpenCV, interleaved
