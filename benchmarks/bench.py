@@ -229,6 +229,9 @@ def main(argv: list[str]) -> None:
             raise SystemExit("usage: python benchmarks/bench.py versus OTHER_CHECKOUT")
         bench_versus(which[1])
         return
+    unknown = set(which) - {"kernel", "e2e", "batch", "mips"}
+    if unknown:
+        raise SystemExit(f"unknown benchmark {', '.join(sorted(unknown))}; see --help")
     if "kernel" in which:
         bench_kernel()
     if "e2e" in which:
@@ -237,9 +240,6 @@ def main(argv: list[str]) -> None:
         bench_batch()
     if "mips" in which:
         bench_mips()
-    unknown = set(which) - {"kernel", "e2e", "batch", "mips"}
-    if unknown:
-        raise SystemExit(f"unknown benchmark {', '.join(sorted(unknown))}; see --help")
 
 
 if __name__ == "__main__":

@@ -160,9 +160,11 @@ def row_oneshot(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
         figures = {}
         for build in builds:
             value = median(times[build.name, compression])
-            print(f"oneshot {compression} {build.name}: median {value:.3f} s, best {min(times[build.name, compression]):.3f} s over {runs} runs; "
-                  f"÷ peer zip {value / peer:.2f}, ÷ peer {compression} {value / peer_same:.2f}")  # fmt: skip
-            figures[build.name] = f"{value:.3f} s" + (f" ({value / peer:.2f})" if build.name != "peer" else "")
+            other = f", ÷ peer none {value / peer_same:.2f}" if compression == "none" else ""
+            print(f"oneshot {compression} {build.name}: median {value:.3f} s, best {min(times[build.name, compression]):.3f} s over {runs} runs; ÷ peer zip {value / peer:.2f}{other}")
+            figures[build.name] = f"{value:.3f} s ({value / peer:.2f})"
+        if "peer" in figures:
+            figures["peer"] = f"{peer:.3f} s" + (f" (none: {peer_same:.3f} s)" if compression == "none" else "")
         met = median(times["this", compression]) / peer <= target if not math.isnan(peer) else None
         what = "one shot 2048×1024 float EXR → cube-vcross 512, " + ("zip" if compression == "zip" else "`--compression none`")
         table.add(what + ", ÷ py360convert + OpenCV one shot (zip)", f"≤ {target}", met, **figures)
