@@ -38,7 +38,7 @@ __all__ = ["OPTION_SETS", "dump", "compare", "main"]
 
 #: Keyword arguments of ``envconv.convert`` per option set (on top of ``size``).
 OPTION_SETS = {
-    "bilinear": {"filter": "bilinear"},
+    "bilinear": {"filter": "bilinear"},  # with samples="auto": the defaults
     "nearest": {"filter": "nearest"},
     "bicubic": {"filter": "bicubic"},
     "samples1": {"samples": 1},
