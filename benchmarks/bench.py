@@ -2,15 +2,22 @@
 
 Run by hand and quote the figures; nothing here is a test.
 
-    python benchmarks/bench.py              # everything
-    python benchmarks/bench.py kernel       # supersamples per second in the kernel
+    python benchmarks/bench.py              # kernel, e2e, batch, mips
+    python benchmarks/bench.py kernel       # supersamples per second in envconv.convert
     python benchmarks/bench.py e2e          # whole-process lat-long 2048x1024 EXR -> cube-vcross 512
     python benchmarks/bench.py batch        # envconv batch of 20 such files, -j 1 and -j 2
     python benchmarks/bench.py mips         # a whole mip chain against level 0 alone
     python benchmarks/bench.py versus TREE  # e2e, interleaved, against another checkout
+                                            # (pure-Python trees, put on PYTHONPATH)
+    python benchmarks/bench.py targets --baseline PYTHON --peer PYTHON [--rows ...]
+                                            # issue 14's table: this build, another build's
+                                            # venv and py360convert + OpenCV, interleaved
+                                            # (see benchmarks/targets.py, or targets --help)
 
-Kernel throughput counts output supersamples (pixels × S²) per second of kernel wall time, for
-lat-long 4096×2048 → cube-vcross 1024 on all cores, after one warm-up run. End-to-end time runs
+The envconv measured is the one the running interpreter imports (run this with a venv's python
+in which envconv is installed); the first line printed names it. Kernel throughput counts output
+supersamples (pixels × S²) per second of ``envconv.convert`` wall time, for an in-memory
+lat-long 4096×2048 → cube-vcross 1024 on all cores, after one warm-up call. End-to-end time runs
 ``envconv convert`` as a fresh process (interpreter start to file written), takes the median of
 several runs and excludes the first (which may compile). Peak memory is the child's max RSS.
 """
@@ -31,14 +38,15 @@ import numpy as np
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-sys.path.insert(0, ROOT)
+try:
+    import envconv
+except ImportError:  # not installed: this checkout's (pure-Python builds only)
+    sys.path.insert(0, ROOT)
+    import envconv
 
-import envconv  # noqa: E402
-from envconv.geometry import kernel_geometry  # noqa: E402
-from envconv.kernels.resample import resample_rows  # noqa: E402
-from envconv.resample import source_rips  # noqa: E402
+from builds import EXAMPLES, batch_inputs  # noqa: E402
 
-EXAMPLE = os.path.join(ROOT, "examples", "data", "park-latlong-512.exr")
+EXAMPLE = os.path.join(EXAMPLES, "park-latlong-512.exr")
 
 
 def _latlong(height: int) -> envconv.EnvMap:
@@ -47,32 +55,20 @@ def _latlong(height: int) -> envconv.EnvMap:
     return envconv.convert(park, "latlong", size=height, samples=1)
 
 
-def bench_kernel(samples=(1, 2, 4, 0), repeats: int = 3) -> None:
-    """Kernel throughput at fixed S; S=0 is samples="auto" (adaptive; reported as time only).
-
-    The auto time includes building the source's rip-map, which only auto sampling reads.
-    """
+def bench_kernel(samples=(1, 2, 4, "auto"), repeats: int = 3) -> None:
+    """``envconv.convert`` of an in-memory lat-long 4096×2048 → cube-vcross 1024 at fixed S and
+    at samples="auto" (adaptive; reported as time only), the best of ``repeats`` after a warm-up.
+    The time includes what convert does around the kernel (output allocation, rip-map for auto)."""
     src = _latlong(2048)
-    to = envconv.layouts.get_layout("cube-vcross")
-    n = 1024
-    width, height = to.image_size(n)
-    sgeo = kernel_geometry(src.layout, src.size, 0)
-    dgeo, cf, ct, _ = kernel_geometry(to, n, 0)
-    rot = np.eye(3)
-    out = np.empty((height, width, 3), np.float32)
-    alpha = np.empty((height, width), np.float32)
-    face_pixels = 6 * n * n
-    no_weights = np.empty((1, 1))
+    face_pixels = 6 * 1024 * 1024
     for s in samples:
         times = []
         for _ in range(repeats + 1):  # the first run is a warm-up
             t = time.perf_counter()
-            rips = source_rips(src, src.pixels, s or None, "bilinear", to, n)
-            resample_rows(src.pixels, *rips, *sgeo, dgeo, cf, ct, 1.0, 1.0, s, 1, rot, False, out, alpha, no_weights)
+            envconv.convert(src, "cube-vcross", size=1024, samples=s)
             times.append(time.perf_counter() - t)
-        times = times[1:]
-        best = min(times)
-        if s == 0:
+        best = min(times[1:])
+        if s == "auto":
             print(f"kernel latlong 4096x2048 -> cube-vcross 1024, S=auto: {best * 1e3:7.1f} ms")
             continue
         rate = face_pixels * s * s / best / 1e6
@@ -92,7 +88,7 @@ def _run(cmd: list[str]) -> tuple[float, float]:
 def _compile_bytecode() -> None:
     """Write envconv's .pyc files, as installing the package does (an editable install under
     PYTHONDONTWRITEBYTECODE would otherwise compile every module at every start)."""
-    compileall.compile_dir(os.path.join(ROOT, "envconv"), quiet=1)
+    compileall.compile_dir(os.path.dirname(envconv.__file__), quiet=1)
 
 
 def bench_e2e(runs: int = 6) -> None:
@@ -168,16 +164,8 @@ def bench_batch(files: int = 20) -> None:
     included once, as a batch pays it) and the whole process's wall time per file."""
     exe = os.path.join(os.path.dirname(sys.executable), "envconv")
     _compile_bytecode()
-    examples = sorted(p for p in os.listdir(os.path.join(ROOT, "examples", "data")) if p.endswith(".exr"))
     with tempfile.TemporaryDirectory() as tmp:
-        inputs = os.path.join(tmp, "in")
-        os.makedirs(inputs)
-        for k in range(files):
-            name = examples[k % len(examples)]
-            source = envconv.read(os.path.join(ROOT, "examples", "data", name))
-            yaw = 360.0 * (k // len(examples)) / max(1, files // len(examples))
-            big = envconv.convert(source, "latlong", size=1024, samples=1, rotate=(yaw, 0, 0))
-            envconv.write(big, os.path.join(inputs, f"{k:02d}_{name}"), bit_depth="float")
+        inputs = batch_inputs(os.path.join(tmp, "in"), files)
         for jobs in (1, 2):
             for label, write in (("zip", ["--out", "o/{stem}_{layout}.exr"]), ("none", [])):
                 out = os.path.join(tmp, f"o{jobs}{label}")
@@ -227,12 +215,23 @@ def bench_mips(repeats: int = 7) -> None:
 
 def main(argv: list[str]) -> None:
     which = argv[1:] or ["kernel", "e2e", "batch", "mips"]
-    print(f"envconv {envconv.__version__}, numpy {np.__version__}, {os.cpu_count()} cores")
+    if which[0] in ("-h", "--help"):
+        print(__doc__)
+        return
+    print(f"envconv {envconv.__version__} ({os.path.dirname(envconv.__file__)}), numpy {np.__version__}, {os.cpu_count()} cores")
+    if which[0] == "targets":
+        import targets
+
+        targets.main(which[1:])
+        return
     if which[0] == "versus":
         if len(which) != 2:
             raise SystemExit("usage: python benchmarks/bench.py versus OTHER_CHECKOUT")
         bench_versus(which[1])
         return
+    unknown = set(which) - {"kernel", "e2e", "batch", "mips"}
+    if unknown:
+        raise SystemExit(f"unknown benchmark {', '.join(sorted(unknown))}; see --help")
     if "kernel" in which:
         bench_kernel()
     if "e2e" in which:
