@@ -56,9 +56,10 @@ DEFAULT_INPUT = os.path.join(os.path.dirname(HERE), "examples", "data", "venice-
 
 def _sources(envconv, input_path: str, size: int, sources: str | None) -> dict:
     """EnvMaps by layout name: the input resized and converted by this build, or from a dump."""
-    if sources:
+    if sources:  # layouts the other build has (a newer build may have more)
         with np.load(sources) as data:
-            return {name: envconv.EnvMap(data[f"src/{name}"], name) for name in envconv.layouts.LAYOUTS}
+            return {name: envconv.EnvMap(data[f"src/{name}"], name)
+                    for name in envconv.layouts.LAYOUTS if f"src/{name}" in data.files}  # fmt: skip
     latlong = envconv.convert(envconv.read(input_path), "latlong", size=size)
     return {name: envconv.convert(latlong, name, size=size) for name in envconv.layouts.LAYOUTS}
 
@@ -73,7 +74,7 @@ def dump(path: str, input_path: str, source_size: int, size: int, sources: str |
     arrays = {f"src/{name}": m.pixels for name, m in maps.items()}
     errors = {}
     for source_name, source in maps.items():
-        for target in envconv.layouts.LAYOUTS:
+        for target in maps:
             for option_name, options in OPTION_SETS.items():
                 case = f"{source_name}>{target}/{option_name}"
                 try:
@@ -87,7 +88,7 @@ def dump(path: str, input_path: str, source_size: int, size: int, sources: str |
             "input": os.path.abspath(input_path), "source_size": source_size, "size": size,
             "sources": sources, "errors": errors}  # fmt: skip
     np.savez_compressed(path, meta=np.array(json.dumps(meta)), **arrays)
-    cases = len(maps) * len(envconv.layouts.LAYOUTS) * len(OPTION_SETS)
+    cases = len(maps) * len(maps) * len(OPTION_SETS)
     print(f"{cases} cases ({len(errors)} refused by the library) in {time.perf_counter() - start:.1f} s -> {path}")
 
 

@@ -43,8 +43,12 @@ inline double edge_y_part(double span, double x_part) {
     return std::sqrt(std::max(span * span - x_part * x_part, 0.0));
 }
 
+// A footprint within kAutoTie of a step (an exact ratio, as 48 -> 32 texels gives exactly 3)
+// takes the lower count, whatever the last bits of rounding say.
+constexpr double kAutoTie = 1e-9;
+
 inline int auto_count(double footprint) {
-    int n = int(std::ceil(footprint / kAutoSpacing - kAutoSlack));
+    int n = int(std::ceil(footprint / kAutoSpacing - kAutoSlack - kAutoTie));
     return std::min(std::max(n, 1), kAutoMaxSamples);
 }
 
