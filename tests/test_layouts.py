@@ -144,6 +144,7 @@ SPECIAL_DIRS = [_unit(d) for d in (
     (0.48, 0.6, 0.64), (math.sqrt(0.5), math.sqrt(0.5), 1e-17), (1e-12, 0, -1), (1e-12, 1, 0),
     (0.5, math.sqrt(0.5), 0.5), (-math.sqrt(0.5), 0.1, -0.7),
     (0.0, 1e-160, -1.0),  # |(x, y)|² is subnormal: needs hypot, not sqrt(x² + y²)
+    (5e-324, 5e-324, -1.0),  # subnormal x, y: x / hypot(x, y) is 1 unless scaled up first
 )]  # fmt: skip
 
 random_dirs = st.tuples(

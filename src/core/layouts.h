@@ -164,6 +164,12 @@ inline FacePoint dir_to_face(double x, double y, double z) {
     double zp = z + 1.0;
     double m = std::hypot(std::hypot(x, y), zp);
     if (m == 0.0) return {0, 1.0, 0.0};
+    if (m < 1e-150) {
+        // Subnormal components carry too few bits for x / m: scale by an exact power of two.
+        x = std::ldexp(x, 600);
+        y = std::ldexp(y, 600);
+        m = std::hypot(std::hypot(x, y), std::ldexp(zp, 600));
+    }
     return {0, x / m, -y / m};
 }
 // 4 sr per unit area inside the disk, 4 (2 - R) / R past the rim.
@@ -190,6 +196,13 @@ inline FacePoint dir_to_face(double x, double y, double z) {
     double r_xy = std::hypot(x, y);
     double rad = std::atan2(r_xy, z) / kPi;
     if (r_xy == 0.0) return z >= 0.0 ? FacePoint{0, 0.0, 0.0} : FacePoint{0, 1.0, 0.0};
+    if (r_xy < 1e-150) {
+        // Subnormal (x, y) carry too few bits for x / r_xy (5e-324 / hypot(5e-324, 5e-324) is
+        // 1, not 0.707): scale them by an exact power of two first.
+        x = std::ldexp(x, 600);
+        y = std::ldexp(y, 600);
+        r_xy = std::hypot(x, y);
+    }
     return {0, rad * (x / r_xy), -rad * (y / r_xy)};
 }
 // pi |sin(pi R)| / R sr per unit area; pi^2 at the centre.
