@@ -1,11 +1,15 @@
 #!/usr/bin/env bash
-# Install envconv with its test extras into ./.venv (created if missing), lint, run the tests.
+# Install envconv with its test extras into ./.venv (created if missing), building the native
+# core, then lint and run the tests.
 # Usage: ./run-tests.sh [pytest args...]
 set -euo pipefail
 cd "$(dirname "$0")"
 venv="${ENVCONV_VENV:-.venv}"
 [ -x "$venv/bin/python" ] || python3 -m venv "$venv"
 "$venv/bin/python" -m pip install --quiet --upgrade pip
-"$venv/bin/python" -m pip install --quiet -e '.[test]'
+# The build requirements live in the venv, so that the build folder (build/) is reused and a
+# rebuild after editing src/core/ compiles only what changed.
+"$venv/bin/python" -m pip install --quiet scikit-build-core nanobind cmake ninja
+"$venv/bin/python" -m pip install --quiet --no-build-isolation -e '.[test]'
 "$venv/bin/ruff" check envconv tests benchmarks examples
 exec "$venv/bin/python" -m pytest "$@"

@@ -7,7 +7,7 @@ import os
 from typing import Any
 
 from . import io
-from .resample import convert, preload_kernels
+from .resample import convert
 
 __all__ = ["convert_file", "plan_convert"]
 
@@ -40,7 +40,6 @@ def convert_file(
     # Fail fast on a bad --bit-depth, --compression or --output-colorspace, before reading.
     plan_output(output_path, "float", {}, write.get("output_colorspace"), write.get("bit_depth"),
                 write.get("ocio_config"), write.get("compression"))  # fmt: skip
-    preload_kernels()  # while a one-shot command's input still decodes on another thread
     source = io.read(input_path, **(read or {}))
     source, notes = prepare_input(source, **(color or {}))
     if warnings is None:

@@ -6,13 +6,14 @@ with status ``done``, ``skipped`` or ``failed``, so one bad file never stops the
 
 Engines
 -------
-* ``jobs=1``: in this process; numba uses every core.
-* ``jobs=N``: N worker processes (``spawn``), each limited to ``cores // N`` numba threads so
-  the cores are not oversubscribed. Start-up (imports, loading the cached kernels) is paid once
-  per worker, not once per file.
+* ``jobs=1``: in this process; the kernels use every core (:func:`envconv.kernels.get_threads`).
+* ``jobs=N``: N worker processes (``spawn``), each running its kernels on ``cores // N``
+  threads (1 once there are as many workers as cores, as ``-j 0`` gives), so the cores are not
+  oversubscribed. Start-up (imports) is paid once per worker, not once per file.
 * ``dask="tcp://host:8786"``: the same jobs submitted to a ``dask.distributed`` scheduler
-  (``pip install 'envconv[dask]'``). Workers need envconv installed and the files on a shared
-  path; input and output paths are made absolute before the jobs leave this machine.
+  (``pip install 'envconv[dask]'``), each on one kernel thread: a Dask worker already runs one
+  job per thread. Workers need envconv installed and the files on a shared path; input and
+  output paths are made absolute before the jobs leave this machine.
 
 Modes: ``"all"`` redoes everything; ``"skip-existing"`` skips a job whose outputs all exist;
 ``"update"`` (like ``maketx -u``) redoes a job only when an output is missing or older than
@@ -146,7 +147,7 @@ def _static_outputs(job: Job) -> list[str]:
 
 
 def worker_threads(jobs: int, cores: int | None = None) -> int:
-    """Numba threads per worker so that ``jobs`` workers share the cores."""
+    """Kernel threads per worker so that ``jobs`` workers share the cores."""
     if cores is None:
         cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count()
     return max(1, (cores or 1) // max(1, jobs))
@@ -155,10 +156,17 @@ def worker_threads(jobs: int, cores: int | None = None) -> int:
 def _init_worker(threads: int) -> None:
     # OpenImageIO (EXR compression) reads its thread count when first imported.
     os.environ["OPENIMAGEIO_THREADS"] = str(threads)
-    os.environ["NUMBA_NUM_THREADS"] = str(threads)
-    import numba
+    from .kernels import set_threads
 
-    numba.set_num_threads(min(threads, numba.config.NUMBA_NUM_THREADS))
+    set_threads(threads)
+
+
+def _run_job_on_dask_worker(job: Job, mode: str = "all") -> dict[str, Any]:
+    """:func:`run_job` on one kernel thread: the Dask worker runs one job per thread."""
+    from .kernels import set_threads
+
+    set_threads(1)
+    return run_job(job, mode)
 
 
 def _input_mtime(job: Job) -> float:
@@ -251,7 +259,8 @@ def _run_processes(jobs: list[Job], workers: int, mode: str, finish) -> None:
     from concurrent.futures import ProcessPoolExecutor, as_completed
 
     threads = worker_threads(workers)
-    context = multiprocessing.get_context("spawn")  # numba's OpenMP layer is not fork-safe
+    # A forked child would inherit the parent's imported libraries' thread pools half-copied.
+    context = multiprocessing.get_context("spawn")
     with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
                              initargs=(threads,)) as pool:  # fmt: skip
         futures = {pool.submit(run_job, job, mode): i for i, job in enumerate(jobs)}
@@ -278,7 +287,7 @@ def _run_dask(address: str, jobs: list[Job], mode: str, finish) -> None:
     except (OSError, TimeoutError, ValueError) as exc:
         raise EnvconvError(f"cannot reach the Dask scheduler at {address}: {exc}") from None
     with client:
-        futures = client.map(run_job, jobs, mode=mode, pure=False)
+        futures = client.map(_run_job_on_dask_worker, jobs, mode=mode, pure=False)
         index = {future.key: i for i, future in enumerate(futures)}
         for future in as_completed(futures):
             i = index[future.key]

@@ -11,6 +11,7 @@ import math
 
 import numpy as np
 
+from . import kernels
 from .layouts import Layout, get_layout
 
 __all__ = [
@@ -43,8 +44,6 @@ def uv_to_dir(layout, u, v, size: int = 512, guard: int = 0, fill: bool = False)
     flags : (...) int8
         2 in the valid region, 1 in a guard ring (or anywhere with ``fill``), 0 no data.
     """
-    from .kernels.mapping import map_points_to_dirs
-
     layout = get_layout(layout)
     width, height = layout.image_size(size, guard)
     u, v = np.broadcast_arrays(np.asarray(u, np.float64), np.asarray(v, np.float64))
@@ -54,17 +53,12 @@ def uv_to_dir(layout, u, v, size: int = 512, guard: int = 0, fill: bool = False)
     # u = 1 or v = 1 belongs to the last pixel (half-open intervals, CONVENTIONS.md).
     points[:, 0] = np.minimum(points[:, 0], np.nextafter(width, 0))
     points[:, 1] = np.minimum(points[:, 1], np.nextafter(height, 0))
-    geo, cell_face, cell_turns, _ = kernel_geometry(layout, size, guard)
-    dirs = np.zeros((points.shape[0], 3))
-    flags = np.zeros(points.shape[0], np.int8)
-    map_points_to_dirs(geo, cell_face, cell_turns, points, bool(fill), dirs, flags)
+    dirs, flags = kernels.map_points_to_dirs(kernel_geometry(layout, size, guard), points, fill)
     return dirs.reshape(*shape, 3), flags.reshape(shape)
 
 
 def dir_to_uv(layout, dirs, size: int = 512, guard: int = 0):
     """(u, v) of unit directions (..., 3) in a layout of size N with guard G."""
-    from .kernels.mapping import map_dirs_to_points
-
     layout = get_layout(layout)
     width, height = layout.image_size(size, guard)
     dirs = np.asarray(dirs, np.float64)
@@ -72,9 +66,7 @@ def dir_to_uv(layout, dirs, size: int = 512, guard: int = 0):
     flat = np.ascontiguousarray(dirs.reshape(-1, 3))
     norm = np.linalg.norm(flat, axis=1, keepdims=True)
     flat = np.ascontiguousarray(flat / np.where(norm > 0, norm, 1.0))
-    geo, _, cell_turns, face_cell = kernel_geometry(layout, size, guard)
-    points = np.zeros((flat.shape[0], 2))
-    map_dirs_to_points(geo, cell_turns, face_cell, flat, points)
+    points = kernels.map_dirs_to_points(kernel_geometry(layout, size, guard), flat)
     u = np.clip(points[:, 0] / width, 0.0, 1.0).reshape(shape)
     v = np.clip(points[:, 1] / height, 0.0, 1.0).reshape(shape)
     return u, v
@@ -95,25 +87,18 @@ def pixel_solid_angles(layout, size: int, guard: int = 0, samples: int = 4) -> n
 
     Sums to 4π over a whole layout (up to the S×S sub-sampling error at disk rims).
     """
-    from .kernels.mapping import pixel_solid_angles as kernel
-
     layout = get_layout(layout)
     width, height = layout.image_size(size, guard)
-    geo, cell_face, cell_turns, _ = kernel_geometry(layout, size, guard)
-    out = np.zeros((height, width))
-    kernel(geo, cell_face, cell_turns, 1.0, 1.0, int(samples), out)
-    return out
+    return kernels.pixel_solid_angles(
+        kernel_geometry(layout, size, guard), 1.0, 1.0, samples, (height, width)
+    )
 
 
 def pixel_pitch(layout, dirs: np.ndarray) -> np.ndarray:
     """Angular pixel pitch (radians × N: √Ω of a pixel, for a layout of size N = 1) at each of
     the unit directions ``dirs`` (K, 3)."""
-    from .kernels.mapping import dir_density
-
     layout = get_layout(layout)
-    geo, _, _, _ = kernel_geometry(layout, 64, 0)
-    dens = np.zeros(dirs.shape[0])
-    dir_density(geo, np.ascontiguousarray(dirs, np.float64), dens)
+    dens = kernels.dir_density(kernel_geometry(layout, 64, 0), dirs)
     # A pixel spans 2/(aspect N) × 2/N in (a, b).
     return np.sqrt(dens * 4.0 / layout.aspect)
 

@@ -39,6 +39,7 @@ import math
 
 import numpy as np
 
+from . import kernels
 from .envmap import EnvMap
 from .errors import UsageError
 from .geometry import kernel_geometry
@@ -99,19 +100,15 @@ def mip_sizes(
 
 def _run_direct(source, sgeo, rot, dgeo_all, fill, shape, scale, samples, filt):
     """Resample one level directly: (pixels (H, W, C), coverage (H, W), weights (H, W))."""
-    from .kernels.resample import resample_rows
-
-    dgeo, d_cell_face, d_cell_turns, _ = dgeo_all
     height, width = shape
     out = np.empty((height, width, source.shape[2]), np.float32)
     coverage = np.empty((height, width), np.float32)
     weights = np.empty((height, width), np.float64)
     source = np.ascontiguousarray(source)
     no_rips = np.zeros((1, 1, source.shape[2]), np.float32)  # mips use one fixed S
-    resample_rows(
-        source, no_rips, 0, 0, *sgeo, dgeo, d_cell_face, d_cell_turns,
-        float(scale[0]), float(scale[1]), int(samples), filt, rot, bool(fill), out, coverage,
-        weights,
+    kernels.resample_rows(
+        source, no_rips, 0, 0, sgeo, dgeo_all, scale[0], scale[1], samples, filt, rot, fill,
+        out, coverage, weights,
     )  # fmt: skip
     return out, coverage, weights
 
@@ -137,8 +134,6 @@ def build_chain(
     the output→source rotation ``rot``; see the module docstring for how the other levels are
     made.
     """
-    from .kernels.mips import reduce_blocks
-
     to = get_layout(to)
     sizes = mip_sizes(to, size, guard, count)
     levels = [(level0, coverage0, weights0)]
@@ -152,7 +147,7 @@ def build_chain(
             out = np.empty((hk, wk, src.shape[2]), np.float32)
             cov_k = np.empty((hk, wk), np.float32)
             wts_k = np.empty((hk, wk), np.float64)
-            reduce_blocks(src, wts, cov, bx, by, out, wts_k, cov_k)
+            kernels.reduce_blocks(src, wts, cov, bx, by, out, wts_k, cov_k)
             levels.append((out, cov_k, wts_k))
             continue
         levels.append(
@@ -237,12 +232,8 @@ def level_solid_angles(
     layout: Layout | str, size: int, guard: int = 0, level: int = 0, samples: int = 4
 ) -> np.ndarray:
     """Solid angle (sr) of the valid part of every texel of mip level ``level``, (H_k, W_k)."""
-    from .kernels.mapping import pixel_solid_angles
-
     layout = get_layout(layout)
     sizes = mip_sizes(layout, size, guard, True)
     (w0, h0), (wk, hk) = sizes[0], sizes[level]
-    geo, cell_face, cell_turns, _ = kernel_geometry(layout, size, guard)
-    out = np.zeros((hk, wk))
-    pixel_solid_angles(geo, cell_face, cell_turns, w0 / wk, h0 / hk, int(samples), out)
-    return out
+    geometry = kernel_geometry(layout, size, guard)
+    return kernels.pixel_solid_angles(geometry, w0 / wk, h0 / hk, samples, (hk, wk))

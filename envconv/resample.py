@@ -23,8 +23,8 @@ samples="auto"
     (pass ``samples=2`` or more to trade sharpness for exact highlight energy near 1:1). Pixels cut by a rim or a cell edge take at least 8 × 8.
     With the bilinear filter a lat-long source is read through a horizontal rip-map where a
     pixel spans at least 8 × 2^k texels along x (its polar rows), and sub-samples are counted
-    in that level's texels (see :mod:`envconv.kernels.ripmap` and ``RIP_MIN_SPAN`` in
-    :mod:`envconv.kernels.footprint`).
+    in that level's texels (see :func:`envconv.kernels.build_rips` and ``RIP_MIN_SPAN`` in
+    :mod:`envconv.kernels`).
     A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
     With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
     of output to source pixel pitch on the horizon, so that every level is the exact block
@@ -43,6 +43,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from . import kernels
 from .conventions import apply_remap, environment_axes, resolve_convention
 from .envmap import EnvMap
 from .errors import LayoutError, UsageError
@@ -50,27 +51,13 @@ from .geometry import horizon_pitch, kernel_geometry, pixel_pitch
 from .layouts import Layout, get_layout
 from .rotation import parse_rotation, rotation_matrix
 
-__all__ = ["convert", "default_size", "auto_samples", "FILTERS", "MAX_SAMPLES"]
+__all__ = ["convert", "default_size", "auto_samples", "source_rips", "FILTERS", "MAX_SAMPLES"]
 
 log = logging.getLogger(__name__)
 
 #: Reconstruction filters by name → kernel code.
 FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
 MAX_SAMPLES = 32
-
-
-def preload_kernels() -> None:
-    """Get the kernels every conversion runs ready ahead of the first one.
-
-    Only a process the command line runs, which loads numba's cached machine code without
-    numba (see ``envconv._jit``), has anything to do here: ``convert_file`` calls this before
-    reading its input, so that loading them overlaps decoding the input on another thread."""
-    from . import _jit
-    from .kernels.mapping import dir_density
-    from .kernels.resample import resample_rows
-    from .kernels.ripmap import _fill_rips
-
-    _jit.preload(resample_rows, _fill_rips, dir_density)
 
 
 def default_size(source: EnvMap, to: Layout | str) -> int:
@@ -161,8 +148,6 @@ def convert(
     >>> cube.pixels.shape
     (128, 96, 3)
     """
-    from .kernels.resample import resample_rows
-
     to = get_layout(to)
     cin = resolve_convention(in_convention, envmap.layout)
     cout = resolve_convention(out_convention, to)
@@ -204,9 +189,9 @@ def convert(
     )
     # The coverage is kept for an alpha channel, the mip chain and the same-grid copy below.
     needs_coverage = alpha or mips or same_grid
-    coverage = np.empty((height, width) if needs_coverage else (1, 1), np.float32)
+    coverage = np.empty((height, width), np.float32) if needs_coverage else None
     sgeo = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
-    dgeo, d_cell_face, d_cell_turns, _ = kernel_geometry(to, size, guard_px)
+    dgeo = kernel_geometry(to, size, guard_px)
     log.debug(
         "resample %s -> %s N=%d S=%s filter=%s",
         envmap.layout.name,
@@ -218,10 +203,10 @@ def convert(
     src = np.ascontiguousarray(src)
     rip, rip_levels, rip_row_count = source_rips(envmap, src, n_samples, filter, to, size)
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
-    weights = np.empty((height, width) if mips else (1, 1), np.float64)
-    resample_rows(
-        src, rip, rip_levels, rip_row_count, *sgeo, dgeo, d_cell_face, d_cell_turns,
-        1.0, 1.0, n_samples or 0, FILTERS[filter], rot, fill, out, coverage, weights,
+    weights = np.empty((height, width), np.float64) if mips else None
+    kernels.resample_rows(
+        src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
+        FILTERS[filter], rot, fill, out, coverage, weights,
     )  # fmt: skip
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
@@ -273,8 +258,6 @@ def source_rips(
     texels along x to read a level are filled (:func:`rip_rows`); without ``to`` and ``size``,
     every row.
     """
-    from .kernels.ripmap import build_rips
-
     if (
         samples is None
         and filter == "bilinear"
@@ -283,7 +266,7 @@ def source_rips(
     ):
         height = src.shape[0]
         rows = height if to is None or size is None else rip_rows(src.shape[1], height, to, size)
-        rip, levels = build_rips(src, rows)
+        rip, levels = kernels.build_rips(src, rows)
         return rip, levels, rows
     return np.zeros((1, 1, src.shape[2]), np.float32), 0, 0
 
@@ -297,16 +280,14 @@ def rip_rows(width: int, height: int, to: Layout | str, size: int) -> int:
     pixels of layout ``to`` at ``size`` may read.
 
     A pixel reads level 1 or above where its two edges span at least 2 · RIP_MIN_SPAN texels
-    along x (:mod:`envconv.kernels.footprint`). An edge of θ radians spans at most
+    along x (``RIP_MIN_SPAN`` in :mod:`envconv.kernels`). An edge of θ radians spans at most
     W θ / (2π cos φ) texels along x at latitude φ, so that happens only where
-    cos φ ≤ W · 2 θ_max / (2π · 2 RIP_MIN_SPAN). θ_max is the largest pixel pitch √Ω of the
+    cos φ ≤ W · 2 θ_max / (2π · 2 kernels.RIP_MIN_SPAN). θ_max is the largest pixel pitch √Ω of the
     output over 4096 directions, times 2 for anisotropy; the rows are widened by θ_max (the
     pixel's own reach) and 3 rows. This is an estimate, not a bound: the kernel reads level 0
     wherever a pixel could reach an unfilled row, so a low estimate costs speed, never accuracy.
     Layouts with a singular rim (a mirror ball) fill every row.
     """
-    from .kernels.footprint import RIP_MIN_SPAN
-
     count = 4096  # Fibonacci directions, evenly spread over the sphere
     k = np.arange(count) + 0.5
     polar = np.arccos(1.0 - 2.0 * k / count)
@@ -314,7 +295,7 @@ def rip_rows(width: int, height: int, to: Layout | str, size: int) -> int:
     dirs = np.stack([np.sin(polar) * np.sin(azimuth), np.cos(polar),
                      np.sin(polar) * np.cos(azimuth)], -1)  # fmt: skip
     pitch = _ANISOTROPY * float(np.max(pixel_pitch(to, dirs))) / size
-    cos_limit = width * 2.0 * pitch / (2.0 * math.pi * 2.0 * RIP_MIN_SPAN)
+    cos_limit = width * 2.0 * pitch / (2.0 * math.pi * 2.0 * kernels.RIP_MIN_SPAN)
     if not np.isfinite(pitch) or cos_limit >= 1.0:
         return height
     from_pole = math.pi / 2 - math.acos(cos_limit) + pitch

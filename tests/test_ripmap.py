@@ -1,6 +1,6 @@
-"""The lat-long rip-map that auto sampling reads in polar rows (envconv.kernels.ripmap).
+"""The lat-long rip-map that auto sampling reads in polar rows (envconv.kernels.build_rips).
 
-Truth: numpy box averages of level 0, the seam-aware bilinear read of envconv.kernels.taps
+Truth: numpy box averages of level 0, the seam-aware bilinear read of the core's taps
 (the continued mapping that the known-direction tests pin to CONVENTIONS.md), and
 analytic environments averaged over each output pixel (tests/naive.py).
 """
@@ -12,30 +12,27 @@ import math
 import naive
 import numpy as np
 import pytest
-from numba import njit
 
 import envconv
+from envconv import kernels
 from envconv.geometry import kernel_geometry
-from envconv.kernels.resample import resample_rows
-from envconv.kernels.ripmap import build_rips, level_tap, rip_level_count, rip_offset
-from envconv.kernels.taps import FILTER_BILINEAR, accumulate_sample
+from envconv.kernels import (
+    FILTER_BILINEAR,
+    build_rips,
+    filtered_reads,
+    level_reads,
+    resample_rows,
+    rip_level_count,
+    rip_offset,
+)
 
 
-@njit
 def _level_read(rip, start, width, x, y):
-    acc = np.zeros(rip.shape[2])
-    level_tap(rip, start, width, x, y, 1.0, acc)
-    return acc
+    return level_reads(rip, start, width, [(x, y)])[0]
 
 
-@njit
-def _seam_aware_read(src, geo, cell_face, cell_turns, face_cell, x, y):
-    acc = np.zeros(src.shape[2])
-    tmp = np.zeros(3 * src.shape[2])
-    accumulate_sample(
-        src, geo, cell_face, cell_turns, face_cell, 0, x, y, FILTER_BILINEAR, 1.0, acc, tmp
-    )
-    return acc
+def _seam_aware_read(src, geometry, x, y):
+    return filtered_reads(src, geometry, [0], [(x, y)], FILTER_BILINEAR)[0]
 
 
 @pytest.mark.parametrize(
@@ -76,12 +73,12 @@ def test_level_tap_on_level_0_matches_the_seam_aware_bilinear_read():
     height, width = 16, 32
     src = rng.random((height, width, 3)).astype(np.float32)
     layout = envconv.layouts.get_layout("latlong")
-    geo, cell_face, cell_turns, face_cell = kernel_geometry(layout, height, 0)
+    geometry = kernel_geometry(layout, height, 0)
     xs = np.concatenate([rng.uniform(0, width, 200), [0.0, 0.1, 0.5, 31.6, 31.99]])
     ys = np.concatenate([rng.uniform(0, height, 200), [0.0, 0.2, 15.9, 16.0, 8.0]])
     for x, y in zip(xs, ys, strict=True):
         got = _level_read(src, 0, width, x, y)
-        expected = _seam_aware_read(src, geo, cell_face, cell_turns, face_cell, x, y)
+        expected = _seam_aware_read(src, geometry, x, y)
         np.testing.assert_allclose(got, expected, rtol=1e-6, atol=1e-7, err_msg=f"{x}, {y}")
 
 
@@ -124,12 +121,12 @@ def _convert_without_rips(source, n, samples):
     width, height = to.image_size(n)
     out = np.empty((height, width, 3), np.float32)
     alpha = np.empty((height, width), np.float32)
-    dgeo, cf, ct, _ = kernel_geometry(to, n, 0)
+    dgeo = kernel_geometry(to, n, 0)
     sgeo = kernel_geometry(source.layout, source.size, 0)
     no_rips = np.zeros((1, 1, 3), np.float32)
     resample_rows(
-        source.pixels, no_rips, 0, 0, *sgeo, dgeo, cf, ct, 1.0, 1.0, samples, 1, np.eye(3),
-        False, out, alpha, np.empty((1, 1)),
+        source.pixels, no_rips, 0, 0, sgeo, dgeo, 1.0, 1.0, samples, 1, np.eye(3), False, out,
+        alpha,
     )  # fmt: skip
     return out
 
@@ -169,10 +166,9 @@ def test_only_the_polar_rows_are_filled_and_they_equal_a_full_build():
 
 def _poisoned_rips(monkeypatch, rows=None):
     """Make source_rips fill unfilled rip-map rows with NaN, and optionally fix the row count."""
-    import envconv.kernels.ripmap as ripmap_module
     import envconv.resample as resample_module
 
-    original = ripmap_module.build_rips
+    original = kernels.build_rips
 
     def poisoned(src, rows=None, out=None):
         height, width, nch = src.shape
@@ -180,7 +176,7 @@ def _poisoned_rips(monkeypatch, rows=None):
         shape = (height, width - (width >> levels), nch)
         return original(src, rows, np.full(shape, np.nan, np.float32))
 
-    monkeypatch.setattr(ripmap_module, "build_rips", poisoned)
+    monkeypatch.setattr(kernels, "build_rips", poisoned)
     if rows is not None:
         monkeypatch.setattr(resample_module, "rip_rows", lambda *args: rows)
 

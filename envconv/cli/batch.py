@@ -21,7 +21,7 @@ from .progress import Progress, summary_line
 __all__ = ["batch_command", "batch_options", "BatchSpec", "run_batch_command", "execute"]
 
 BATCH_OPTIONS = [
-    click.option("-j", "--jobs", "workers", type=click.IntRange(min=0), default=1, show_default=True, help="Worker processes (0: one per core); numba threads are split between them."),
+    click.option("-j", "--jobs", "workers", type=click.IntRange(min=0), default=1, show_default=True, help="Worker processes (0: one per core); kernel threads are split between them."),
     click.option("--skip-existing", is_flag=True, help="Skip an input whose outputs all exist."),
     click.option("-u", "--update", is_flag=True, help="Redo an input only when an output is missing or older than it."),
     click.option("--report", "report", metavar="FILE.json", help="Write one JSON record per input (status, outputs, seconds, error)."),

@@ -1,7 +1,7 @@
 """The layout registry: every layout by name.
 
 Adding a layout means one new module and one line in ``_MODULE_LAYOUTS`` below (plus, for a new
-geometry family, one branch in :mod:`envconv.kernels.geometry`).
+geometry family, its maps in ``src/core/layouts.h`` and one case in each dispatch there).
 """
 
 from __future__ import annotations

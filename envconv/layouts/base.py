@@ -2,8 +2,10 @@
 
 A layout is a grid of equal cells laid over the image. Each cell holds one *face*: a square or
 rectangular chart of directions with local coordinates (a, b) in [-1, 1]², a to the right and b
-downward. The numba functions of the layout's geometry family turn (face, a, b) into a direction
-and back; this module holds the Python-side description (size rule, cell placement, files).
+downward. The maps of the layout's geometry family, which turn (face, a, b) into a direction and
+back, live once, in the native core (``src/core/layouts.h``), and reach Python as the vectorised
+:meth:`Layout.face_to_dir`, :meth:`Layout.dir_to_face` and :meth:`Layout.density`; this module
+holds the Python-side description (size rule, cell placement, files).
 
 Pixel-centre rule: pixel (i, j) of a W×H image covers [i/W, (i+1)/W] × [j/H, (j+1)/H] and its
 centre is at ((i + 0.5)/W, (j + 0.5)/H). With a guard ring of G pixels every cell grows by G on
@@ -31,7 +33,7 @@ __all__ = [
     "FAMILY_TENNISBALL",
 ]
 
-# Geometry family codes; the kernels dispatch on these integers.
+# Geometry family codes; the native core dispatches on these integers (src/core/layouts.h).
 FAMILY_LATLONG = 0
 FAMILY_CUBE_GL = 1
 FAMILY_CUBE_EXR = 2
@@ -67,7 +69,7 @@ class Layout:
     name : str
         Registry name, e.g. ``"cube-vcross"``.
     family : int
-        Geometry family code (``FAMILY_*``) whose numba functions map (face, a, b) ↔ direction.
+        Geometry family code (``FAMILY_*``) whose native maps take (face, a, b) ↔ direction.
     description : str
         One line for ``envconv layouts``.
     columns, rows : int
@@ -138,6 +140,25 @@ class Layout:
         """Raise LayoutError unless ``n`` is a usable characteristic size."""
         if not isinstance(n, (int, np.integer)) or n < 1:
             raise LayoutError(f"size must be a positive integer, got {n!r}")
+
+    def face_to_dir(self, face, a, b) -> np.ndarray:
+        """Unit directions (..., 3) of local points (a, b) of ``face`` (arrays broadcast),
+        continued past the valid region as guard rings and filter taps read it."""
+        from ..kernels import face_to_dir
+
+        return face_to_dir(self.family, face, a, b)
+
+    def dir_to_face(self, dirs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(face, a, b) of unit directions (..., 3), with (a, b) in the face's valid region."""
+        from ..kernels import dir_to_face
+
+        return dir_to_face(self.family, dirs)
+
+    def density(self, face, a, b) -> np.ndarray:
+        """Solid angle per unit (a, b) area, in steradians, at local points of ``face``."""
+        from ..kernels import density
+
+        return density(self.family, face, a, b)
 
     def kernel_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Integer tables the kernels read: cell → face, cell → turns, face → cell.

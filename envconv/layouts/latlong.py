@@ -16,12 +16,9 @@ The whole cell is valid. Continued mapping (guard ring, filter taps): the same f
 their ranges, so columns wrap and rows past a pole continue on the opposite meridian.
 """
 
-import math
-
-from .._jit import jit
 from .base import FAMILY_LATLONG, Cell, Layout
 
-__all__ = ["LAYOUT", "face_to_dir", "dir_to_face", "density"]
+__all__ = ["LAYOUT"]
 
 LAYOUT = Layout(
     name="latlong",
@@ -33,26 +30,3 @@ LAYOUT = Layout(
     cells=(Cell(0, 0, 0),),
     face_names=("latlong",),
 )
-
-
-@jit
-def face_to_dir(face, a, b):
-    """Direction of local point (a, b); u = (a + 1)/2, v = (b + 1)/2, continued past ±1."""
-    lon = -math.pi * a
-    lat = -0.5 * math.pi * b
-    cl = math.cos(lat)
-    return math.sin(lon) * cl, math.sin(lat), math.cos(lon) * cl
-
-
-@jit
-def dir_to_face(x, y, z):
-    """(face, a, b) of a unit direction; a in [-1, 1] with -Z at a = -1."""
-    lon = math.atan2(x, z)
-    lat = math.asin(min(1.0, max(-1.0, y)))
-    return 0, -lon / math.pi, -2.0 * lat / math.pi
-
-
-@jit
-def density(face, a, b):
-    """Solid angle per unit area of (a, b): |cos lat| · π · π/2 (sr)."""
-    return abs(math.cos(0.5 * math.pi * b)) * (0.5 * math.pi * math.pi)

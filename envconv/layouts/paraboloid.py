@@ -15,10 +15,9 @@ The PowerVR lookup samples the packed image unchanged. Continued mapping: the sa
 the circle. Solid angle per unit area: 4/s².
 """
 
-from .._jit import jit
 from .base import FAMILY_PARABOLOID, Cell, Layout
 
-__all__ = ["LAYOUT", "face_to_dir", "dir_to_face", "density"]
+__all__ = ["LAYOUT"]
 
 LAYOUT = Layout(
     name="paraboloid",
@@ -30,32 +29,3 @@ LAYOUT = Layout(
     cells=(Cell(0, 0, 0), Cell(1, 0, 1)),
     face_names=("front", "back"),
 )
-
-
-@jit
-def face_to_dir(face, a, b):
-    """Direction of point (a, b) = (X, -Y) of the front (0) or back (1) half."""
-    X, Y = a, -b
-    r2 = X * X + Y * Y
-    s = 1.0 / (1.0 + r2)
-    z = (1.0 - r2) * s
-    if face == 1:
-        z = -z
-    return 2.0 * X * s, 2.0 * Y * s, z
-
-
-@jit
-def dir_to_face(x, y, z):
-    """(face, a, b) of a direction: front for z >= 0, back for z < 0."""
-    if z >= 0.0:
-        k = 1.0 / (1.0 + z)
-        return 0, x * k, -y * k
-    k = 1.0 / (1.0 - z)
-    return 1, x * k, -y * k
-
-
-@jit
-def density(face, a, b):
-    """Solid angle per unit (a, b) area: 4 / (1 + X² + Y²)² (sr)."""
-    s = 1.0 + a * a + b * b
-    return 4.0 / (s * s)

@@ -1,0 +1,289 @@
+// Layout maps of every geometry family: (face, a, b) <-> unit direction, and the solid-angle
+// density of (a, b).
+//
+// Frame (CONVENTIONS.md): world +Y up, +Z the lat-long centre, +X at u = 0.25 of a lat-long.
+// A face is a chart with local coordinates (a, b) in [-1, 1]^2, a to the right and b downward;
+// the Python layout modules (envconv/layouts/) place faces in cells and carry the diagrams.
+// Every face_to_dir is continued past its valid region (guard rings and filter taps read it),
+// and density is the solid angle per unit (a, b) area, in steradians.
+//
+// Family codes match envconv/layouts/base.py FAMILY_*. Kernels dispatch on the code, never on a
+// Python callback.
+#pragma once
+
+#include <algorithm>
+#include <cmath>
+
+namespace envconv {
+
+constexpr double kPi = 3.14159265358979323846;
+
+enum Family : int {
+    kLatlong = 0,
+    kCubeGL = 1,
+    kCubeExr = 2,
+    kSphere = 3,
+    kAngular = 4,
+    kParaboloid = 5,
+    kTennisball = 6,
+};
+
+constexpr int kFamilyCount = 7;
+
+struct Vec3 {
+    double x, y, z;
+};
+
+struct FacePoint {
+    int face;
+    double a, b;
+};
+
+inline Vec3 normalized(double x, double y, double z) {
+    double inv = 1.0 / std::sqrt(x * x + y * y + z * z);
+    return {x * inv, y * inv, z * inv};
+}
+
+// latlong (OpenEXR envmap=latlong): lon = -pi a, lat = -pi/2 b,
+// d = (sin lon cos lat, sin lat, cos lon cos lat). Past |a| > 1 columns wrap; past |b| > 1 rows
+// continue over the pole on the opposite meridian (the same formulas).
+namespace latlong {
+inline Vec3 face_to_dir(int, double a, double b) {
+    double lon = -kPi * a, lat = -0.5 * kPi * b;
+    double cl = std::cos(lat);
+    return {std::sin(lon) * cl, std::sin(lat), std::cos(lon) * cl};
+}
+inline FacePoint dir_to_face(double x, double y, double z) {
+    double lon = std::atan2(x, z);
+    double lat = std::asin(std::min(1.0, std::max(-1.0, y)));
+    return {0, -lon / kPi, -2.0 * lat / kPi};
+}
+inline double density(int, double, double b) {
+    return std::fabs(std::cos(0.5 * kPi * b)) * (0.5 * kPi * kPi);
+}
+}  // namespace latlong
+
+// Cube faces in the GL/D3D/KTX order, in the left-handed cube frame c = (-x, y, z): faces
+// +Xc -Xc +Yc -Yc +Zc -Zc, each an unmirrored view from inside. Face texel (a, b) -> c:
+//   +Xc (1, -b, -a)  -Xc (-1, -b, a)  +Yc (a, 1, b)  -Yc (a, -1, -b)  +Zc (a, -b, 1)  -Zc (-a, -b, -1)
+// World d = normalise(-c_x, c_y, c_z). Major axis picks the face; exact ties go to x, then y,
+// then z, and zero counts as positive. The continued map is the face plane past +-1.
+namespace cube_gl {
+inline Vec3 face_to_dir(int face, double a, double b) {
+    switch (face) {
+        case 0: return normalized(-1.0, -b, -a);
+        case 1: return normalized(1.0, -b, a);
+        case 2: return normalized(-a, 1.0, b);
+        case 3: return normalized(-a, -1.0, -b);
+        case 4: return normalized(-a, -b, 1.0);
+        default: return normalized(a, -b, -1.0);
+    }
+}
+inline FacePoint dir_to_face(double x, double y, double z) {
+    double cx = -x;
+    double ax = std::fabs(cx), ay = std::fabs(y), az = std::fabs(z);
+    if (ax >= ay && ax >= az) {
+        if (cx >= 0.0) return {0, -z / ax, -y / ax};
+        return {1, z / ax, -y / ax};
+    }
+    if (ay >= az) {
+        if (y >= 0.0) return {2, cx / ay, z / ay};
+        return {3, cx / ay, -z / ay};
+    }
+    if (z >= 0.0) return {4, cx / az, -y / az};
+    return {5, -cx / az, -y / az};
+}
+// (1 + a^2 + b^2)^(-3/2) sr per unit area, for both cube families.
+inline double density(int, double a, double b) {
+    double r2 = 1.0 + a * a + b * b;
+    return 1.0 / (r2 * std::sqrt(r2));
+}
+}  // namespace cube_gl
+
+// OpenEXR envcube (envmap=cube): world faces +X -X +Y -Y +Z -Z. Face texel (a, b) -> d:
+//   +X (1, -b, a)  -X (-1, -b, -a)  +Y (a, 1, -b)  -Y (a, -1, b)  +Z (-a, -b, 1)  -Z (a, -b, -1)
+namespace cube_exr {
+inline Vec3 face_to_dir(int face, double a, double b) {
+    switch (face) {
+        case 0: return normalized(1.0, -b, a);
+        case 1: return normalized(-1.0, -b, -a);
+        case 2: return normalized(a, 1.0, -b);
+        case 3: return normalized(a, -1.0, b);
+        case 4: return normalized(-a, -b, 1.0);
+        default: return normalized(a, -b, -1.0);
+    }
+}
+inline FacePoint dir_to_face(double x, double y, double z) {
+    double ax = std::fabs(x), ay = std::fabs(y), az = std::fabs(z);
+    if (ax >= ay && ax >= az) {
+        if (x >= 0.0) return {0, z / ax, -y / ax};
+        return {1, -z / ax, -y / ax};
+    }
+    if (ay >= az) {
+        if (y >= 0.0) return {2, x / ay, -z / ay};
+        return {3, x / ay, z / ay};
+    }
+    if (z >= 0.0) return {4, -x / az, -y / az};
+    return {5, x / az, -y / az};
+}
+}  // namespace cube_exr
+
+// Mirror ball (GL_SPHERE_MAP): X = a, Y = -b, R^2 = X^2 + Y^2 <= 1, n_z = sqrt(1 - R^2),
+// d = (2 n_z X, 2 n_z Y, 2 n_z^2 - 1). Past the rim (1 < R <= 2) the great circle continues
+// through -Z: alpha = 2 pi - 2 asin(2 - R), d = (sin alpha X/R, sin alpha Y/R, cos alpha).
+namespace sphere {
+inline Vec3 face_to_dir(int, double a, double b) {
+    double X = a, Y = -b;
+    double r2 = X * X + Y * Y;
+    if (r2 <= 1.0) {
+        double nz = std::sqrt(1.0 - r2);
+        return {2.0 * nz * X, 2.0 * nz * Y, 2.0 * nz * nz - 1.0};
+    }
+    double r = std::sqrt(r2);
+    double rc = std::min(r, 2.0);
+    double alpha = 2.0 * kPi - 2.0 * std::asin(2.0 - rc);
+    double s = std::sin(alpha) / r;
+    return {s * X, s * Y, std::cos(alpha)};
+}
+// (a, b) = (x, -y) / |d + Z|; -Z itself lands on the rim at a = 1. hypot keeps precision when
+// the components' squares are subnormal.
+inline FacePoint dir_to_face(double x, double y, double z) {
+    double zp = z + 1.0;
+    double m = std::hypot(std::hypot(x, y), zp);
+    if (m == 0.0) return {0, 1.0, 0.0};
+    return {0, x / m, -y / m};
+}
+// 4 sr per unit area inside the disk, 4 (2 - R) / R past the rim.
+inline double density(int, double a, double b) {
+    double r = std::sqrt(a * a + b * b);
+    if (r <= 1.0) return 4.0;
+    return 4.0 * std::max(2.0 - r, 1e-6) / r;
+}
+}  // namespace sphere
+
+// Angular light probe (Debevec): alpha = pi R from +Z, d = (sin alpha X/R, sin alpha Y/R,
+// cos alpha), X = a, Y = -b; R = 1 is -Z. Continued: the same formula past R = 1.
+namespace angular {
+inline Vec3 face_to_dir(int, double a, double b) {
+    double X = a, Y = -b;
+    double r = std::sqrt(X * X + Y * Y);
+    if (r < 1e-12) return {0.0, 0.0, 1.0};
+    double alpha = kPi * r;
+    double s = std::sin(alpha) / r;
+    return {s * X, s * Y, std::cos(alpha)};
+}
+// atan2 keeps full precision near the centre, where acos(z) loses half the digits.
+inline FacePoint dir_to_face(double x, double y, double z) {
+    double r_xy = std::hypot(x, y);
+    double rad = std::atan2(r_xy, z) / kPi;
+    if (r_xy == 0.0) return z >= 0.0 ? FacePoint{0, 0.0, 0.0} : FacePoint{0, 1.0, 0.0};
+    return {0, rad * (x / r_xy), -rad * (y / r_xy)};
+}
+// pi |sin(pi R)| / R sr per unit area; pi^2 at the centre.
+inline double density(int, double a, double b) {
+    double r = std::sqrt(a * a + b * b);
+    if (r < 1e-9) return kPi * kPi;
+    return kPi * std::fabs(std::sin(kPi * r)) / r;
+}
+}  // namespace angular
+
+// Dual paraboloid (Heidrich & Seidel): front (face 0, z >= 0) (X, Y) = (x, y) / (1 + z), back
+// (face 1, z < 0) (X, Y) = (x, y) / (1 - z); X = a, Y = -b. Inverse with s = 1 + X^2 + Y^2:
+// d = (2X, 2Y, +-(1 - X^2 - Y^2)) / s. Continued: the same formula past the circle.
+namespace paraboloid {
+inline Vec3 face_to_dir(int face, double a, double b) {
+    double X = a, Y = -b;
+    double r2 = X * X + Y * Y;
+    double s = 1.0 / (1.0 + r2);
+    double z = (1.0 - r2) * s;
+    if (face == 1) z = -z;
+    return {2.0 * X * s, 2.0 * Y * s, z};
+}
+inline FacePoint dir_to_face(double x, double y, double z) {
+    if (z >= 0.0) {
+        double k = 1.0 / (1.0 + z);
+        return {0, x * k, -y * k};
+    }
+    double k = 1.0 / (1.0 - z);
+    return {1, x * k, -y * k};
+}
+// 4 / (1 + X^2 + Y^2)^2 sr per unit area.
+inline double density(int, double a, double b) {
+    double s = 1.0 + a * a + b * b;
+    return 4.0 / (s * s);
+}
+}  // namespace paraboloid
+
+// Tennisball: two 270 x 90 degree bands; phi = -3pi/4 a, theta = -pi/4 b.
+// C1 (face 0): d = (sin phi cos theta, sin theta, cos phi cos theta), about +Y, centred on +Z.
+// C2 (face 1): d = (sin theta, sin phi cos theta, -cos phi cos theta), about +X, centred on -Z.
+// A direction belongs to C1 if (z >= 0 and |y| <= sqrt2/2) or (z <= 0 and |x| >= sqrt2/2).
+namespace tennisball {
+constexpr double kPhiHalf = 0.75 * kPi;
+constexpr double kThetaHalf = 0.25 * kPi;
+constexpr double kHalfSqrt2 = 0.70710678118654757;  // 0.5 * sqrt(2) rounded as Python does
+inline Vec3 face_to_dir(int face, double a, double b) {
+    double phi = -kPhiHalf * a, theta = -kThetaHalf * b;
+    double ct = std::cos(theta);
+    if (face == 0) return {std::sin(phi) * ct, std::sin(theta), std::cos(phi) * ct};
+    return {std::sin(theta), std::sin(phi) * ct, -std::cos(phi) * ct};
+}
+inline FacePoint dir_to_face(double x, double y, double z) {
+    if ((z >= 0.0 && std::fabs(y) <= kHalfSqrt2) || (z <= 0.0 && std::fabs(x) >= kHalfSqrt2)) {
+        double theta = std::asin(std::min(1.0, std::max(-1.0, y)));
+        double phi = std::atan2(x, z);
+        return {0, -phi / kPhiHalf, -theta / kThetaHalf};
+    }
+    double theta = std::asin(std::min(1.0, std::max(-1.0, x)));
+    double phi = std::atan2(y, -z);
+    return {1, -phi / kPhiHalf, -theta / kThetaHalf};
+}
+// |cos theta| (3pi/4)(pi/4) sr per unit area.
+inline double density(int, double, double b) {
+    return std::fabs(std::cos(kThetaHalf * b)) * (kPhiHalf * kThetaHalf);
+}
+}  // namespace tennisball
+
+// Dispatch on the family code.
+inline Vec3 face_to_dir(int family, int face, double a, double b) {
+    switch (family) {
+        case kLatlong: return latlong::face_to_dir(face, a, b);
+        case kCubeGL: return cube_gl::face_to_dir(face, a, b);
+        case kCubeExr: return cube_exr::face_to_dir(face, a, b);
+        case kSphere: return sphere::face_to_dir(face, a, b);
+        case kAngular: return angular::face_to_dir(face, a, b);
+        case kParaboloid: return paraboloid::face_to_dir(face, a, b);
+        default: return tennisball::face_to_dir(face, a, b);
+    }
+}
+
+inline FacePoint dir_to_face(int family, double x, double y, double z) {
+    switch (family) {
+        case kLatlong: return latlong::dir_to_face(x, y, z);
+        case kCubeGL: return cube_gl::dir_to_face(x, y, z);
+        case kCubeExr: return cube_exr::dir_to_face(x, y, z);
+        case kSphere: return sphere::dir_to_face(x, y, z);
+        case kAngular: return angular::dir_to_face(x, y, z);
+        case kParaboloid: return paraboloid::dir_to_face(x, y, z);
+        default: return tennisball::dir_to_face(x, y, z);
+    }
+}
+
+inline double density(int family, int face, double a, double b) {
+    switch (family) {
+        case kLatlong: return latlong::density(face, a, b);
+        case kCubeGL:
+        case kCubeExr: return cube_gl::density(face, a, b);
+        case kSphere: return sphere::density(face, a, b);
+        case kAngular: return angular::density(face, a, b);
+        case kParaboloid: return paraboloid::density(face, a, b);
+        default: return tennisball::density(face, a, b);
+    }
+}
+
+// Families whose valid region in a cell is the unit disk a^2 + b^2 <= 1.
+inline bool is_disk(int family) {
+    return family == kSphere || family == kAngular || family == kParaboloid;
+}
+
+}  // namespace envconv

@@ -1,0 +1,272 @@
+// Python bindings of the native core: envconv._core.
+//
+// Each function takes C-contiguous numpy arrays of the stated dtypes (envconv/kernels.py makes
+// them so, allocates the outputs and carries the docstrings), releases the GIL and runs on
+// `threads` threads. A layout instance arrives as four arrays: geo = [family, N, G, aspect,
+// columns, rows] (int64) and the int32 tables cell -> face, cell -> half turns, face -> cell.
+#include <nanobind/nanobind.h>
+#include <nanobind/ndarray.h>
+
+#include <algorithm>
+#include <stdexcept>
+#include <vector>
+
+#include "kernels.h"
+#include "ripmap.h"
+#include "tiles.h"
+
+namespace nb = nanobind;
+using namespace nb::literals;
+
+namespace {
+
+template <typename T, typename... Extra>
+using Array = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu, Extra...>;
+
+using GeoArray = Array<const int64_t, nb::shape<6>>;
+using TableArray = Array<const int32_t, nb::ndim<1>>;
+
+envconv::Geometry make_geometry(const GeoArray& geo, const TableArray& cell_face,
+                                const TableArray& cell_turns, const TableArray& face_cell) {
+    envconv::Geometry g;
+    g.family = int(geo(0));
+    g.n = geo(1);
+    g.guard = geo(2);
+    g.aspect = geo(3);
+    g.columns = geo(4);
+    g.rows = geo(5);
+    if (g.family < 0 || g.family >= envconv::kFamilyCount || g.n < 1 || g.guard < 0 ||
+        g.aspect < 1 || g.columns < 1 || g.rows < 1)
+        throw std::invalid_argument("invalid layout geometry");
+    if (int64_t(cell_face.shape(0)) != g.columns * g.rows ||
+        int64_t(cell_turns.shape(0)) != g.columns * g.rows || face_cell.shape(0) < 1)
+        throw std::invalid_argument("layout tables do not match the geometry");
+    g.cell_face = cell_face.data();
+    g.cell_turns = cell_turns.data();
+    g.face_cell = face_cell.data();
+    return g;
+}
+
+envconv::Image make_image(const Array<const float, nb::ndim<3>>& a) {
+    return {a.data(), int64_t(a.shape(0)), int64_t(a.shape(1)), int64_t(a.shape(2))};
+}
+
+void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3>> rip,
+              int rip_levels, int64_t rip_rows, GeoArray sgeo, TableArray s_cell_face,
+              TableArray s_cell_turns, TableArray s_face_cell, GeoArray dgeo,
+              TableArray d_cell_face, TableArray d_cell_turns, TableArray d_face_cell,
+              double scale_x, double scale_y, int samples, int filter,
+              Array<const double, nb::shape<3, 3>> rot, bool fill, Array<float, nb::ndim<3>> out,
+              Array<float, nb::ndim<2>> alpha, Array<double, nb::ndim<2>> weights, int threads) {
+    envconv::Conversion cv;
+    cv.src = make_geometry(sgeo, s_cell_face, s_cell_turns, s_face_cell);
+    cv.dst = make_geometry(dgeo, d_cell_face, d_cell_turns, d_face_cell);
+    for (int k = 0; k < 9; ++k) cv.rot.m[k] = rot.data()[k];
+    cv.scale_x = scale_x;
+    cv.scale_y = scale_y;
+    cv.fill = fill;
+    int64_t height = out.shape(0), width = out.shape(1), nch = out.shape(2);
+    auto sw = cv.src.columns * cv.src.cell_width(), sh = cv.src.rows * cv.src.cell_height();
+    if (int64_t(src.shape(0)) != sh || int64_t(src.shape(1)) != sw)
+        throw std::invalid_argument("source array does not match its layout's size");
+    if (int64_t(src.shape(2)) != nch || int64_t(rip.shape(2)) != nch)
+        throw std::invalid_argument("source and output channel counts differ");
+    if (filter < envconv::kNearest || filter > envconv::kBicubic)
+        throw std::invalid_argument("unknown filter code");
+    bool has_alpha = alpha.is_valid(), has_weights = weights.is_valid();
+    if ((has_alpha && (int64_t(alpha.shape(0)) != height || int64_t(alpha.shape(1)) != width)) ||
+        (has_weights &&
+         (int64_t(weights.shape(0)) != height || int64_t(weights.shape(1)) != width)))
+        throw std::invalid_argument("alpha and weights must have the output's height and width");
+    if (rip_levels > 0 && (int64_t(rip.shape(0)) != sh || cv.src.family != envconv::kLatlong))
+        throw std::invalid_argument("a rip-map needs a lat-long source of its height");
+    envconv::RipMap rips{make_image(rip), rip_levels, rip_rows};
+    envconv::ResampleOutput o{out.data(), height, width, nch,
+                              has_alpha ? alpha.data() : nullptr,
+                              has_weights ? weights.data() : nullptr};
+    envconv::Image image = make_image(src);
+    nb::gil_scoped_release release;
+    envconv::resample(image, rips, cv, samples, filter, o, threads);
+}
+
+void fill_rips(Array<const float, nb::ndim<3>> src, int levels, int64_t rows,
+               Array<float, nb::ndim<3>> out, int threads) {
+    int64_t width = src.shape(1);
+    if (levels < 1 || (width >> levels) < 1 || out.shape(0) != src.shape(0) ||
+        int64_t(out.shape(1)) != width - (width >> levels) || out.shape(2) != src.shape(2))
+        throw std::invalid_argument("rip-map array has the wrong shape");
+    envconv::Image image = make_image(src);
+    nb::gil_scoped_release release;
+    envconv::fill_rips(image, levels, std::max<int64_t>(0, rows), out.data(), threads);
+}
+
+void reduce_blocks(Array<const float, nb::ndim<3>> src, Array<const double, nb::ndim<2>> wsrc,
+                   Array<const float, nb::ndim<2>> asrc, int64_t bx, int64_t by,
+                   Array<float, nb::ndim<3>> out, Array<double, nb::ndim<2>> wout,
+                   Array<float, nb::ndim<2>> aout, int threads) {
+    int64_t height = out.shape(0), width = out.shape(1);
+    if (bx < 1 || by < 1 || int64_t(src.shape(0)) < height * by ||
+        int64_t(src.shape(1)) < width * bx || src.shape(2) != out.shape(2) ||
+        wsrc.shape(0) != src.shape(0) || wsrc.shape(1) != src.shape(1) ||
+        asrc.shape(0) != src.shape(0) || asrc.shape(1) != src.shape(1) ||
+        int64_t(wout.shape(0)) != height || int64_t(wout.shape(1)) != width ||
+        int64_t(aout.shape(0)) != height || int64_t(aout.shape(1)) != width)
+        throw std::invalid_argument("block reduction arrays have mismatched shapes");
+    envconv::Image image = make_image(src);
+    nb::gil_scoped_release release;
+    envconv::reduce_blocks(image, wsrc.data(), asrc.data(), bx, by, out.data(), height, width,
+                           wout.data(), aout.data(), threads);
+}
+
+void map_points_to_dirs(GeoArray geo, TableArray cell_face, TableArray cell_turns,
+                        TableArray face_cell, Array<const double, nb::shape<-1, 2>> points,
+                        bool fill, Array<double, nb::shape<-1, 3>> dirs,
+                        Array<int8_t, nb::ndim<1>> flags, int threads) {
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    int64_t count = points.shape(0);
+    if (int64_t(dirs.shape(0)) != count || int64_t(flags.shape(0)) != count)
+        throw std::invalid_argument("points, dirs and flags differ in length");
+    nb::gil_scoped_release release;
+    envconv::map_points_to_dirs(g, points.data(), count, fill, dirs.data(), flags.data(), threads);
+}
+
+void map_dirs_to_points(GeoArray geo, TableArray cell_face, TableArray cell_turns,
+                        TableArray face_cell, Array<const double, nb::shape<-1, 3>> dirs,
+                        Array<double, nb::shape<-1, 2>> points, int threads) {
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    int64_t count = dirs.shape(0);
+    if (int64_t(points.shape(0)) != count)
+        throw std::invalid_argument("dirs and points differ in length");
+    nb::gil_scoped_release release;
+    envconv::map_dirs_to_points(g, dirs.data(), count, points.data(), threads);
+}
+
+void pixel_solid_angles(GeoArray geo, TableArray cell_face, TableArray cell_turns,
+                        TableArray face_cell, double scale_x, double scale_y, int samples,
+                        Array<double, nb::ndim<2>> out, int threads) {
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    if (samples < 1) throw std::invalid_argument("samples must be at least 1");
+    nb::gil_scoped_release release;
+    envconv::pixel_solid_angles(g, scale_x, scale_y, samples, out.data(), out.shape(0),
+                                out.shape(1), threads);
+}
+
+void dir_density(GeoArray geo, TableArray cell_face, TableArray cell_turns, TableArray face_cell,
+                 Array<const double, nb::shape<-1, 3>> dirs, Array<double, nb::ndim<1>> out) {
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    if (out.shape(0) != dirs.shape(0)) throw std::invalid_argument("dirs and out differ in length");
+    nb::gil_scoped_release release;
+    envconv::dir_density(g, dirs.data(), dirs.shape(0), out.data());
+}
+
+// Per-family maps on flat arrays, for the layout modules and the tests.
+void face_to_dir(int family, Array<const int32_t, nb::ndim<1>> face,
+                 Array<const double, nb::ndim<1>> a, Array<const double, nb::ndim<1>> b,
+                 Array<double, nb::shape<-1, 3>> out) {
+    if (family < 0 || family >= envconv::kFamilyCount) throw std::invalid_argument("bad family");
+    size_t n = a.shape(0);
+    if (face.shape(0) != n || b.shape(0) != n || out.shape(0) != n)
+        throw std::invalid_argument("face, a, b and out differ in length");
+    nb::gil_scoped_release release;
+    for (size_t k = 0; k < n; ++k) {
+        envconv::Vec3 d = envconv::face_to_dir(family, face(k), a(k), b(k));
+        out(k, 0) = d.x;
+        out(k, 1) = d.y;
+        out(k, 2) = d.z;
+    }
+}
+
+void dir_to_face(int family, Array<const double, nb::shape<-1, 3>> dirs,
+                 Array<int32_t, nb::ndim<1>> face, Array<double, nb::ndim<1>> a,
+                 Array<double, nb::ndim<1>> b) {
+    if (family < 0 || family >= envconv::kFamilyCount) throw std::invalid_argument("bad family");
+    size_t n = dirs.shape(0);
+    if (face.shape(0) != n || a.shape(0) != n || b.shape(0) != n)
+        throw std::invalid_argument("dirs, face, a and b differ in length");
+    nb::gil_scoped_release release;
+    for (size_t k = 0; k < n; ++k) {
+        envconv::FacePoint f = envconv::dir_to_face(family, dirs(k, 0), dirs(k, 1), dirs(k, 2));
+        face(k) = f.face;
+        a(k) = f.a;
+        b(k) = f.b;
+    }
+}
+
+void density(int family, Array<const int32_t, nb::ndim<1>> face,
+             Array<const double, nb::ndim<1>> a, Array<const double, nb::ndim<1>> b,
+             Array<double, nb::ndim<1>> out) {
+    if (family < 0 || family >= envconv::kFamilyCount) throw std::invalid_argument("bad family");
+    size_t n = a.shape(0);
+    if (face.shape(0) != n || b.shape(0) != n || out.shape(0) != n)
+        throw std::invalid_argument("face, a, b and out differ in length");
+    nb::gil_scoped_release release;
+    for (size_t k = 0; k < n; ++k) out(k) = envconv::density(family, face(k), a(k), b(k));
+}
+
+// Test hooks: one filtered read of a source image, and one read of a rip-map level.
+void filtered_reads(Array<const float, nb::ndim<3>> src, GeoArray geo, TableArray cell_face,
+                    TableArray cell_turns, TableArray face_cell,
+                    Array<const int64_t, nb::ndim<1>> cells,
+                    Array<const double, nb::shape<-1, 2>> points, int filter,
+                    Array<double, nb::ndim<2>> out) {
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    envconv::Image image = make_image(src);
+    size_t n = points.shape(0);
+    if (cells.shape(0) != n || out.shape(0) != n || int64_t(out.shape(1)) != image.channels)
+        throw std::invalid_argument("cells, points and out differ in length");
+    std::vector<double> tmp(3 * image.channels);
+    nb::gil_scoped_release release;
+    for (size_t k = 0; k < n; ++k) {
+        double* acc = out.data() + k * image.channels;
+        for (int64_t c = 0; c < image.channels; ++c) acc[c] = 0.0;
+        envconv::accumulate_sample(image, g, cells(k), points(k, 0), points(k, 1), filter, 1.0,
+                                   acc, tmp.data());
+    }
+}
+
+void level_reads(Array<const float, nb::ndim<3>> rip, int64_t start, int64_t level_width,
+                 Array<const double, nb::shape<-1, 2>> points, Array<double, nb::ndim<2>> out) {
+    envconv::Image image = make_image(rip);
+    size_t n = points.shape(0);
+    if (out.shape(0) != n || int64_t(out.shape(1)) != image.channels || level_width < 1 ||
+        start < 0 || start + level_width > image.width)
+        throw std::invalid_argument("bad level read arguments");
+    nb::gil_scoped_release release;
+    for (size_t k = 0; k < n; ++k) {
+        double* acc = out.data() + k * image.channels;
+        for (int64_t c = 0; c < image.channels; ++c) acc[c] = 0.0;
+        envconv::level_tap(image, start, level_width, points(k, 0), points(k, 1), 1.0, acc);
+    }
+}
+
+}  // namespace
+
+NB_MODULE(_core, m) {
+    m.doc() = "envconv's native kernels; use them through envconv.kernels.";
+    m.def("resample", &resample, "src"_a, "rip"_a, "rip_levels"_a, "rip_rows"_a, "sgeo"_a,
+          "s_cell_face"_a, "s_cell_turns"_a, "s_face_cell"_a, "dgeo"_a, "d_cell_face"_a,
+          "d_cell_turns"_a, "d_face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "filter"_a,
+          "rot"_a, "fill"_a, "out"_a, "alpha"_a.none(), "weights"_a.none(), "threads"_a);
+    m.def("fill_rips", &fill_rips, "src"_a, "levels"_a, "rows"_a, "out"_a, "threads"_a);
+    m.def("reduce_blocks", &reduce_blocks, "src"_a, "wsrc"_a, "asrc"_a, "bx"_a, "by"_a, "out"_a,
+          "wout"_a, "aout"_a, "threads"_a);
+    m.def("map_points_to_dirs", &map_points_to_dirs, "geo"_a, "cell_face"_a, "cell_turns"_a,
+          "face_cell"_a, "points"_a, "fill"_a, "dirs"_a, "flags"_a, "threads"_a);
+    m.def("map_dirs_to_points", &map_dirs_to_points, "geo"_a, "cell_face"_a, "cell_turns"_a,
+          "face_cell"_a, "dirs"_a, "points"_a, "threads"_a);
+    m.def("pixel_solid_angles", &pixel_solid_angles, "geo"_a, "cell_face"_a, "cell_turns"_a,
+          "face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "out"_a, "threads"_a);
+    m.def("dir_density", &dir_density, "geo"_a, "cell_face"_a, "cell_turns"_a, "face_cell"_a,
+          "dirs"_a, "out"_a);
+    m.def("face_to_dir", &face_to_dir, "family"_a, "face"_a, "a"_a, "b"_a, "out"_a);
+    m.def("dir_to_face", &dir_to_face, "family"_a, "dirs"_a, "face"_a, "a"_a, "b"_a);
+    m.def("density", &density, "family"_a, "face"_a, "a"_a, "b"_a, "out"_a);
+    m.def("filtered_reads", &filtered_reads, "src"_a, "geo"_a, "cell_face"_a, "cell_turns"_a,
+          "face_cell"_a, "cells"_a, "points"_a, "filter"_a, "out"_a);
+    m.def("level_reads", &level_reads, "rip"_a, "start"_a, "level_width"_a, "points"_a, "out"_a);
+    m.attr("TILE") = envconv::kTile;
+    m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;
+    m.attr("AUTO_MAX_SAMPLES") = envconv::kAutoMaxSamples;
+    m.attr("AUTO_EDGE_SAMPLES") = envconv::kAutoEdgeSamples;
+    m.attr("FAMILY_COUNT") = envconv::kFamilyCount;
+}

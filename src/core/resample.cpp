@@ -1,0 +1,350 @@
+// The fused resampling kernel.
+//
+// For every output pixel the kernel takes S x S stratified sub-samples at (i + (sx + 0.5)/S,
+// j + (sy + 0.5)/S) output pixels, scales them to level-0 image points, maps each to a
+// direction through the output layout (continued into guard rings), rotates it into the source
+// frame, maps it to a source image point and reads the source through the reconstruction
+// filter. Samples are weighted by the output layout's solid-angle density, so a pixel is the
+// solid-angle mean of the environment over the part of it that holds directions. Alpha is the
+// fraction of sub-samples in the valid region.
+//
+// Work is split into bands of kTile output rows, one band per task, so the working set stays
+// a few rows whatever the image size. Within a band, tiles (tiles.h) interpolate the map; tiles
+// that fail their checks split, and blocks that still fail map every sub-sample exactly.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+#include "kernels.h"
+#include "parallel.h"
+#include "ripmap.h"
+#include "tiles.h"
+
+namespace envconv {
+namespace {
+
+// The most sub-samples per pixel edge a tile may take (samples = 64 is the API's limit).
+constexpr int kMaxRowSamples = 64;
+
+struct Job {
+    const Image& src;
+    const RipMap& rip;
+    const Conversion& cv;
+    const ResampleOutput& out;
+    int samples, filter;
+    bool adaptive, fast_taps, may_tile;
+    int rip_levels, largest_tile, min_subtile;
+    int64_t s_width;
+};
+
+// Per-band working memory.
+struct Scratch {
+    std::vector<double> acc, tmp;
+    std::vector<double> rows;  // (kTile * kMaxRowSamples, 9)
+    explicit Scratch(int64_t nch)
+        : acc(nch), tmp(3 * nch, 0.0), rows(size_t(kTile) * kMaxRowSamples * 9) {}
+};
+
+// Write the normalised accumulator and the coverage of output pixel (i, j).
+void store(const ResampleOutput& out, int64_t j, int64_t i, const double* acc, double wsum,
+           double coverage) {
+    float* px = out.pixels + (j * out.width + i) * out.channels;
+    if (wsum > 0.0) {
+        double inv = 1.0 / wsum;
+        for (int64_t c = 0; c < out.channels; ++c) px[c] = float(acc[c] * inv);
+    } else {
+        for (int64_t c = 0; c < out.channels; ++c) px[c] = 0.0f;
+    }
+    if (out.alpha) out.alpha[j * out.width + i] = float(coverage);
+    if (out.weights) out.weights[j * out.width + i] = wsum;
+}
+
+// Accumulate output pixel (i, j) mapping its nx x ny sub-samples exactly. With level >= 1
+// (a lat-long source) the taps read that level of the rip-map. Returns the summed weights and
+// sets nvalid to the number of sub-samples in the valid region.
+double exact_pixel(const Job& job, int64_t i, int64_t j, int nx, int ny, int level,
+                   Scratch& scratch, int& nvalid) {
+    const Conversion& cv = job.cv;
+    const int dfam = cv.dst.family;
+    int64_t start = rip_offset(job.s_width, level);
+    int64_t level_width = job.s_width >> level;
+    double x_scale = 1.0 / double(1 << level);
+    double wsum = 0.0;
+    nvalid = 0;
+    for (int sy = 0; sy < ny; ++sy) {
+        double py = (double(j) + (sy + 0.5) / ny) * cv.scale_y;
+        for (int sx = 0; sx < nx; ++sx) {
+            double px = (double(i) + (sx + 0.5) / nx) * cv.scale_x;
+            OutputSample s = output_sample(cv.dst, px, py, cv.fill);
+            if (!s.readable) continue;
+            if (s.valid) ++nvalid;
+            double w = density(dfam, s.face, s.a, s.b);
+            ImagePoint p = source_point(cv.src, dfam, s.face, s.a, s.b, cv.rot);
+            if (level > 0) {
+                level_tap(job.rip.image, start, level_width, p.x * x_scale, p.y, w,
+                          scratch.acc.data());
+            } else {
+                accumulate_sample(job.src, cv.src, p.cell, p.x, p.y, job.filter, w,
+                                  scratch.acc.data(), scratch.tmp.data());
+            }
+            wsum += w;
+        }
+    }
+    return wsum;
+}
+
+// Sub-samples per edge and rip-map level of an exactly mapped pixel under adaptive sampling.
+void adaptive_counts(const Job& job, int64_t i, int64_t j, int& nx, int& ny, int& level) {
+    const Conversion& cv = job.cv;
+    Footprint f = pixel_footprint(cv, i, j);
+    level = 0;
+    if (job.rip_levels > 0 && f.x_of_x >= 0.0) {
+        level = rip_level(f.x_of_x + f.x_of_y, job.rip_levels);
+        if (level > 0 &&
+            !rows_filled(centre_source_y(cv, i, j),
+                         edge_y_part(f.span_x, f.x_of_x) + edge_y_part(f.span_y, f.x_of_y),
+                         job.rip.rows, job.src.height)) {
+            level = 0;
+        }
+    }
+    nx = auto_count(level_span(f.span_x, f.x_of_x, level));
+    ny = auto_count(level_span(f.span_y, f.x_of_y, level));
+    // A pixel not wholly in one cell's valid region (a rim, a cell edge) needs enough
+    // sub-samples for its coverage (alpha).
+    int64_t cell;
+    int whole = tile_face(cv.dst, double(i) * cv.scale_x, double(j) * cv.scale_y,
+                          double(i + 1) * cv.scale_x, double(j + 1) * cv.scale_y, cell);
+    if (whole < 0) {
+        nx = std::max(nx, kAutoEdgeSamples);
+        ny = std::max(ny, kAutoEdgeSamples);
+    }
+}
+
+// Every pixel of block [i0, i1) x [j0, j1), mapped exactly.
+void exact_block(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
+                 Scratch& scratch) {
+    for (int64_t j = j0; j < j1; ++j) {
+        for (int64_t i = i0; i < i1; ++i) {
+            std::fill(scratch.acc.begin(), scratch.acc.end(), 0.0);
+            int nx = job.samples, ny = job.samples, level = 0;
+            if (job.adaptive) adaptive_counts(job, i, j, nx, ny, level);
+            int nvalid;
+            double wsum = exact_pixel(job, i, j, nx, ny, level, scratch, nvalid);
+            store(job.out, j, i, scratch.acc.data(), wsum, double(nvalid) / double(nx * ny));
+        }
+    }
+}
+
+// Rip-map level and sub-samples per edge of an interpolated tile under adaptive sampling.
+void tile_counts(const Job& job, const TileGrid& grid, double inv_tw, double inv_th, int& nx,
+                 int& ny, int& level) {
+    level = 0;
+    if (job.rip_levels > 0) {
+        double x_extent = std::numeric_limits<double>::infinity();
+        for (int k = 0; k < 3; ++k) {
+            x_extent = std::min(x_extent, std::fabs(grid[k][2][0] - grid[k][0][0]) * inv_tw +
+                                              std::fabs(grid[2][k][0] - grid[0][k][0]) * inv_th);
+        }
+        level = rip_level(x_extent, job.rip_levels);
+        if (level > 0) {
+            double y_lo = std::numeric_limits<double>::infinity(), y_hi = -y_lo;
+            for (int k = 0; k < 3; ++k) {
+                for (int m = 0; m < 3; ++m) {
+                    y_lo = std::min(y_lo, grid[k][m][1]);
+                    y_hi = std::max(y_hi, grid[k][m][1]);
+                }
+            }
+            if (!rows_filled(0.5 * (y_lo + y_hi), y_hi - y_lo, job.rip.rows, job.src.height)) {
+                level = 0;
+            }
+        }
+    }
+    double shrink = 1.0 / double(1 << level);
+    double edge_x = 0.0, edge_y = 0.0;
+    for (int k = 0; k < 3; ++k) {
+        edge_x = std::max(edge_x, std::hypot((grid[k][2][0] - grid[k][0][0]) * shrink,
+                                             grid[k][2][1] - grid[k][0][1]));
+        edge_y = std::max(edge_y, std::hypot((grid[2][k][0] - grid[0][k][0]) * shrink,
+                                             grid[2][k][1] - grid[0][k][1]));
+    }
+    nx = auto_count(edge_x * inv_tw);
+    ny = auto_count(edge_y * inv_th);
+}
+
+// Every pixel of an interpolated tile [i0, i1) x [j0, j1) whose grid maps into source cell c00.
+void tiled_block(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
+                 const TileGrid& grid, int64_t c00, Scratch& scratch) {
+    const Geometry& s = job.cv.src;
+    const int64_t nch = job.out.channels;
+    int64_t bx0 = (c00 % s.columns) * s.cell_width();
+    int64_t by0 = (c00 / s.columns) * s.cell_height();
+    int64_t bx1 = bx0 + s.cell_width() - 1, by1 = by0 + s.cell_height() - 1;
+    double inv_tw = 1.0 / double(i1 - i0), inv_th = 1.0 / double(j1 - j0);
+    int nx = job.samples, ny = job.samples, level = 0;
+    if (job.adaptive) tile_counts(job, grid, inv_tw, inv_th, nx, ny, level);
+    // Taps read level 0 (src) or a rip-map level, at x_scale x + x_offset.
+    const Image* image = &job.src;
+    double x_scale = 1.0, x_offset = 0.0;
+    int64_t level_start = 0, level_width = job.s_width;
+    if (level > 0) {
+        image = &job.rip.image;
+        x_scale = 1.0 / double(1 << level);
+        level_start = rip_offset(job.s_width, level);
+        level_width = job.s_width >> level;
+        x_offset = double(level_start);
+        bx0 = level_start;
+        bx1 = level_start + level_width - 1;
+    }
+    double inv_nx = 1.0 / nx, inv_ny = 1.0 / ny;
+    const bool rgb = job.fast_taps && nch == 3;
+    // Each row of sub-samples (j, sy) has source x, source y and weight as quadratics in fx,
+    // q0 + fx (c1 + fx c2): 9 numbers per row, shared by the tile's pixels along it.
+    double* rows = scratch.rows.data();
+    for (int64_t r = 0; r < (j1 - j0) * ny; ++r) {
+        double fy = (double(r / ny) + (double(r % ny) + 0.5) * inv_ny) * inv_th;
+        for (int k = 0; k < 3; ++k) {
+            double q0 = lagrange3(grid[0][0][k], grid[1][0][k], grid[2][0][k], fy);
+            double q1 = lagrange3(grid[0][1][k], grid[1][1][k], grid[2][1][k], fy);
+            double q2 = lagrange3(grid[0][2][k], grid[1][2][k], grid[2][2][k], fy);
+            rows[r * 9 + 3 * k] = q0;
+            rows[r * 9 + 3 * k + 1] = -3.0 * q0 + 4.0 * q1 - q2;
+            rows[r * 9 + 3 * k + 2] = 2.0 * q0 - 4.0 * q1 + 2.0 * q2;
+        }
+    }
+    double* acc = scratch.acc.data();
+    const int64_t iw = image->width;
+    for (int64_t j = j0; j < j1; ++j) {
+        for (int64_t i = i0; i < i1; ++i) {
+            std::fill(scratch.acc.begin(), scratch.acc.end(), 0.0);
+            // Three channels (the common case) accumulate in registers.
+            double acc_r = 0.0, acc_g = 0.0, acc_b = 0.0, wsum = 0.0;
+            for (int sy = 0; sy < ny; ++sy) {
+                const double* q = rows + ((j - j0) * ny + sy) * 9;
+                for (int sx = 0; sx < nx; ++sx) {
+                    double fx = (double(i - i0) + (sx + 0.5) * inv_nx) * inv_tw;
+                    double spx = q[0] + fx * (q[1] + fx * q[2]);
+                    double spy = q[3] + fx * (q[4] + fx * q[5]);
+                    double w = q[6] + fx * (q[7] + fx * q[8]);
+                    wsum += w;
+                    double tx = spx * x_scale + x_offset - 0.5, ty = spy - 0.5;
+                    double fx0 = std::floor(tx), fy0 = std::floor(ty);
+                    int64_t ix = int64_t(fx0), iy = int64_t(fy0);
+                    if (job.fast_taps && ix >= bx0 && iy >= by0 && ix < bx1 && iy < by1) {
+                        tx -= fx0;
+                        ty -= fy0;
+                        double k00 = w * (1.0 - tx) * (1.0 - ty), k10 = w * tx * (1.0 - ty);
+                        double k01 = w * (1.0 - tx) * ty, k11 = w * tx * ty;
+                        const float* t0 = image->data + (iy * iw + ix) * nch;
+                        const float* t1 = t0 + iw * nch;
+                        if (rgb) {
+                            acc_r += k00 * t0[0] + k10 * t0[3] + k01 * t1[0] + k11 * t1[3];
+                            acc_g += k00 * t0[1] + k10 * t0[4] + k01 * t1[1] + k11 * t1[4];
+                            acc_b += k00 * t0[2] + k10 * t0[5] + k01 * t1[2] + k11 * t1[5];
+                            continue;
+                        }
+                        for (int64_t c = 0; c < nch; ++c) {
+                            acc[c] += k00 * t0[c] + k10 * t0[nch + c] + k01 * t1[c] +
+                                      k11 * t1[nch + c];
+                        }
+                    } else if (level > 0) {
+                        level_tap(job.rip.image, level_start, level_width, spx * x_scale, spy, w,
+                                  acc);
+                    } else {
+                        accumulate_sample(job.src, s, c00, spx, spy, job.filter, w, acc,
+                                          scratch.tmp.data());
+                    }
+                }
+            }
+            if (rgb) {
+                acc[0] += acc_r;
+                acc[1] += acc_g;
+                acc[2] += acc_b;
+            }
+            store(job.out, j, i, acc, wsum, 1.0);
+        }
+    }
+}
+
+// One band of kTile output rows, tile by tile.
+void resample_band(const Job& job, int64_t band, Scratch& scratch) {
+    const Conversion& cv = job.cv;
+    const Geometry& d = cv.dst;
+    const ResampleOutput& out = job.out;
+    int64_t stack[16][3];
+    for (int64_t tile_i0 = 0; tile_i0 < out.width; tile_i0 += kTile) {
+        stack[0][0] = tile_i0;
+        stack[0][1] = band * kTile;
+        stack[0][2] = kTile;
+        int depth = 1;
+        while (depth > 0) {
+            --depth;
+            int64_t i0 = stack[depth][0], j0 = stack[depth][1], size = stack[depth][2];
+            if (i0 >= out.width || j0 >= out.height) continue;
+            int64_t i1 = std::min(i0 + size, out.width), j1 = std::min(j0 + size, out.height);
+            double x0 = double(i0) * cv.scale_x, y0 = double(j0) * cv.scale_y;
+            double x1 = double(i1) * cv.scale_x, y1 = double(j1) * cv.scale_y;
+            if (!cv.fill && tile_in_empty_cell(d, x0, y0, x1, y1)) {
+                std::fill(scratch.acc.begin(), scratch.acc.end(), 0.0);
+                for (int64_t j = j0; j < j1; ++j) {
+                    for (int64_t i = i0; i < i1; ++i) store(out, j, i, scratch.acc.data(), 0.0, 0.0);
+                }
+                continue;
+            }
+            int face = -1;
+            int64_t cell = -1, c00 = -1;
+            if (job.may_tile && size <= job.largest_tile) face = tile_face(d, x0, y0, x1, y1, cell);
+            TileGrid grid;
+            if (face >= 0) {
+                double a00, b00, a10, b10, a01, b01;
+                cell_local(d, cell, x0, y0, a00, b00);
+                cell_local(d, cell, x1, y0, a10, b10);
+                cell_local(d, cell, x0, y1, a01, b01);
+                c00 = map_tile(cv.src, d.family, face, cv.rot, a00, b00, a10 - a00, b10 - b00,
+                               a01 - a00, b01 - b00, grid);
+            }
+            if (c00 >= 0) {
+                tiled_block(job, i0, j0, i1, j1, grid, c00, scratch);
+            } else if (job.may_tile && size > job.min_subtile) {
+                int64_t half = size / 2;
+                for (int q = 0; q < 4; ++q) {
+                    stack[depth][0] = i0 + half * (q % 2);
+                    stack[depth][1] = j0 + half * (q / 2);
+                    stack[depth][2] = half;
+                    ++depth;
+                }
+            } else {
+                exact_block(job, i0, j0, i1, j1, scratch);
+            }
+        }
+    }
+}
+
+}  // namespace
+
+void resample(const Image& src, const RipMap& rip, const Conversion& cv, int samples, int filter,
+              const ResampleOutput& out, int threads) {
+    const Geometry& d = cv.dst;
+    bool adaptive = samples <= 0;
+    bool fast_taps = filter == kBilinear && !cv.src.disk();
+    // Tiles small enough against an output cell (level-0 pixels) for the checks to hold.
+    double dn = double(d.n), dan = double(d.aspect * d.n);
+    bool may_tile = (kTile / 2) * cv.scale_x * kMinTilesPerCell <= dan &&
+                    (kTile / 2) * cv.scale_y * kMinTilesPerCell <= dn && samples <= kMaxRowSamples;
+    int largest_tile = kTile / 2;
+    if (kTile * cv.scale_x * kMinTilesPerCell <= dan && kTile * cv.scale_y * kMinTilesPerCell <= dn)
+        largest_tile = kTile;
+    // A failing tile splits down to kMinSubtile (4 at S = 1, where mapping a 2 x 2 block's grid
+    // costs more than its 4 samples).
+    int min_subtile = samples == 1 ? 4 : kMinSubtile;
+    Job job{src, rip, cv, out, samples, filter, adaptive, fast_taps, may_tile,
+            (adaptive && fast_taps) ? rip.levels : 0, largest_tile, min_subtile,
+            cv.src.aspect * cv.src.n};
+    int64_t bands = (out.height + kTile - 1) / kTile;
+    parallel_for(bands, threads, [&](int64_t band) {
+        Scratch scratch(out.channels);
+        resample_band(job, band, scratch);
+    });
+}
+
+}  // namespace envconv
