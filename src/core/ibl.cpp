@@ -21,7 +21,7 @@ constexpr double kGaussX[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
 constexpr double kGaussW[3] = {0.5555555555555556, 0.8888888888888888, 0.5555555555555556};
 
 void build_level0(const float* faces, int64_t p, int64_t nch, float* out, int threads) {
-    const int64_t stride = 8 + nch;
+    const int64_t stride = 8 + 4 * nch;
     const double h = 1.0 / double(p);  // half a texel in (a, b)
     parallel_for(6 * p, threads, [&](int64_t task) {
         int face = int(task / p);
@@ -47,16 +47,22 @@ void build_level0(const float* faces, int64_t p, int64_t nch, float* out, int th
             node[2] = node[5] = float(mx / omega);
             node[3] = node[6] = float(my / omega);
             node[4] = node[7] = float(mz / omega);
-            for (int64_t c = 0; c < nch; ++c) node[8 + c] = float(omega * double(px[c]));
+            for (int64_t c = 0; c < nch; ++c) {
+                double sc = omega * double(px[c]);
+                node[8 + c] = float(sc);
+                node[8 + nch + 3 * c] = float(sc * mx / omega);
+                node[9 + nch + 3 * c] = float(sc * my / omega);
+                node[10 + nch + 3 * c] = float(sc * mz / omega);
+            }
         }
     });
 }
 
 void build_parent(const float* child, int64_t q, int64_t nch, float* out, int threads) {
-    const int64_t stride = 8 + nch, cq = 2 * q;
+    const int64_t stride = 8 + 4 * nch, cq = 2 * q;
     parallel_for(6 * q, threads, [&](int64_t task) {
         int64_t face = task / q, j = task % q;
-        std::vector<double> sum(nch);
+        std::vector<double> sum(4 * nch);
         for (int64_t i = 0; i < q; ++i) {
             double omega = 0.0, weight = 0.0, g[3] = {0, 0, 0}, l[3] = {0, 0, 0};
             std::fill(sum.begin(), sum.end(), 0.0);
@@ -69,7 +75,7 @@ void build_parent(const float* child, int64_t q, int64_t nch, float* out, int th
                         g[k] += double(c[0]) * c[2 + k];
                         l[k] += double(c[1]) * c[5 + k];
                     }
-                    for (int64_t ch = 0; ch < nch; ++ch) sum[ch] += c[8 + ch];
+                    for (int64_t ch = 0; ch < 4 * nch; ++ch) sum[ch] += c[8 + ch];
                 }
             }
             float* node = out + ((face * q + j) * q + i) * stride;
@@ -79,7 +85,7 @@ void build_parent(const float* child, int64_t q, int64_t nch, float* out, int th
                 node[2 + k] = float(g[k] / omega);
                 node[5 + k] = float(weight > 0.0 ? l[k] / weight : g[k] / omega);
             }
-            for (int64_t ch = 0; ch < nch; ++ch) node[8 + ch] = float(sum[ch]);
+            for (int64_t ch = 0; ch < 4 * nch; ++ch) node[8 + ch] = float(sum[ch]);
         }
     });
 }
@@ -106,6 +112,11 @@ struct Lobe {
         double qt = q(t);
         return c0 * t / (qt * qt);
     }
+    double slope(double t) const {
+        if (t <= 0.0) return 0.0;
+        double qt = q(t);
+        return c0 * (qt - 2.0 * b * t) / (qt * qt * qt);
+    }
     // K(t) + K''(t) var / 2, the expectation of K over a spread of t with variance var.
     double expected(double t, double var) const {
         if (t <= 0.0) return 0.0;
@@ -123,8 +134,9 @@ struct NodeRef {
 
 constexpr int kLeafSamples = 3;
 // A node across n's horizon is expanded anyway when omega K there is below this fraction of
-// Int K (narrow lobes are ~0 at the horizon): each such node errs by at most that much.
-constexpr double kKinkTolerance = 1e-4;  // per edge, for texels of the finest level still too close
+// Int K: each such node errs by at most that much. Narrow lobes are ~0 at the horizon and may
+// skip the kink coarsely; broad lobes (the cosine) meet it along the whole horizon.
+constexpr double kKinkToleranceNarrow = 1e-4, kKinkToleranceBroad = 1e-6;  // per edge, for texels of the finest level still too close
 
 // Sum over the pyramid of Int L K and Int K (per channel into num, and den) at unit direction n.
 void sum_lobe(const Pyramid& pyr, const Lobe& lobe, double tau, double kink_tol, const Vec3& n,
@@ -166,8 +178,12 @@ void sum_lobe(const Pyramid& pyr, const Lobe& lobe, double tau, double kink_tol,
             double tl = n.x * lx + n.y * ly + n.z * lz;
             double tlu = tl / std::sqrt(std::max(l2, 1e-30));
             double vl = 0.5 * (1.0 - tlu * tlu) * (1.0 - l2);
-            double k = lobe.expected(tl, vl);
-            for (int64_t c = 0; c < nch; ++c) num[c] += double(node[8 + c]) * k;
+            double k = lobe.expected(tl, vl), k1 = lobe.slope(tl);
+            for (int64_t c = 0; c < nch; ++c) {
+                const float* pc = node + 8 + nch + 3 * c;
+                double sc = node[8 + c];
+                num[c] += sc * k + k1 * (n.x * pc[0] + n.y * pc[1] + n.z * pc[2] - tl * sc);
+            }
             continue;
         }
         if (nd.level > 0) {
@@ -209,7 +225,8 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
                float* out, int64_t height, int64_t width, int threads) {
     const int64_t nch = pyr.channels;
     const Lobe lobe(std::max(alpha, 1e-4));
-    const double kink_tol = kKinkTolerance * lobe.integral();
+    const double kink_tol =
+        (alpha > 0.1 ? kKinkToleranceBroad : kKinkToleranceNarrow) * lobe.integral();
     const double sub_area = (2.0 * scale_x / double(dst.aspect * dst.n)) *
                             (2.0 * scale_y / double(dst.n)) / double(samples * samples);
     parallel_for(height, threads, [&](int64_t j) {

@@ -14,7 +14,7 @@
 // 1 - |m|^2 is the spread of directions in the node). A node far enough from n that K is
 // smooth over it contributes by a second-order expansion of K about the node's mean t = n.m:
 //   Int_node L K(n.l) dl ~ S [K(t) + K''(t) Var(t) / 2],  Var(t) ~ (1 - t^2)(1 - |m|^2) / 2,
-// exact for a constant node to second order and, through the luminance-weighted mean, exact to
+// exact for a constant node to second order and, with each channel's first moment, exact to
 // first order for any radiance inside it (a one-texel sun is placed where it is, not at the
 // node's centre). A node is expanded when its spread of t, dt, is small against K's own scale
 // there, q(t) / |q'| (dt |b| <= tau q), and it does not straddle n's horizon (where K has a
@@ -33,14 +33,17 @@ namespace envconv {
 // A pyramid of the six faces of a cube (GL face table), level 0 of p x p texels per face, each
 // level halving down to 1 x 1. Node (level s, face f, row j, column i) starts at
 // data + offset(s) + ((f * (p >> s) + j) * (p >> s) + i) * stride, with fields
-// [omega, W, mgx, mgy, mgz, mlx, mly, mlz, S_0 .. S_{C-1}]: solid angle, luminance weight
-// Int max(lum, 0) dl, geometric and luminance-weighted mean directions, Int L_c dl.
+// [omega, W, mgx, mgy, mgz, mlx, mly, mlz, S_0 .. S_{C-1}, P_0 .. P_{C-1}]: solid angle,
+// luminance weight Int max(lum, 0) dl, geometric and luminance-weighted mean directions,
+// Int L_c dl, and Int L_c l dl (three floats each): the expansion about the luminance-weighted
+// mean carries each channel's own first moment, so channels that differ are exact to first
+// order too.
 struct Pyramid {
     const float* data;
     int64_t p;
     int levels;
     int64_t channels;
-    int64_t stride() const { return 8 + channels; }
+    int64_t stride() const { return 8 + 4 * channels; }
     int64_t offset(int s) const {
         int64_t off = 0;
         for (int k = 0; k < s; ++k) off += 6 * (p >> k) * (p >> k);
@@ -54,7 +57,7 @@ struct Pyramid {
 };
 
 // Build the pyramid of `faces` (6, p, p, C) float32, p a power of two, into `out`
-// (Pyramid::node_count(p) * (8 + C) floats).
+// (Pyramid::node_count(p) * (8 + 4 C) floats).
 void build_pyramid(const float* faces, int64_t p, int64_t channels, float* out, int threads);
 
 // One prefiltered level: every pixel of `out` (H, W, C) is the solid-angle mean over its

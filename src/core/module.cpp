@@ -245,7 +245,7 @@ void ibl_pyramid(Array<const float, nb::ndim<4>> faces, Array<float, nb::ndim<1>
                  int threads) {
     int64_t p = faces.shape(1), nch = faces.shape(3);
     if (faces.shape(0) != 6 || int64_t(faces.shape(2)) != p || p < 1 || (p & (p - 1)) ||
-        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * (8 + nch))
+        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * (8 + 4 * nch))
         throw std::invalid_argument("faces must be (6, p, p, C) with p a power of two");
     nb::gil_scoped_release release;
     envconv::build_pyramid(faces.data(), p, nch, out.data(), threads);
@@ -259,7 +259,7 @@ void ibl_prefilter(Array<const float, nb::ndim<1>> pyramid, int64_t p, int64_t c
     envconv::Pyramid pyr{pyramid.data(), p, 0, channels};
     for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
     if (p < 1 || (p & (p - 1)) ||
-        int64_t(pyramid.shape(0)) != envconv::Pyramid::node_count(p) * (8 + channels) ||
+        int64_t(pyramid.shape(0)) != envconv::Pyramid::node_count(p) * (8 + 4 * channels) ||
         int64_t(out.shape(2)) != channels || samples < 1 || !(alpha > 0.0) || !(tau > 0.0))
         throw std::invalid_argument("bad prefilter arguments");
     auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
