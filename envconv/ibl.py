@@ -132,8 +132,6 @@ def _pow2(n: float) -> int:
 def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None):
     """(pyramid, p, channels, rotation) for the prefilter: the source's cube faces (6, p, p, C)
     summed into the core's pyramid; ``rotation`` maps output directions to the pyramid's."""
-    from .mips import _run_direct
-
     nch = level0.shape[2]
     n_cube = size * horizon_pitch("cube-faces") / horizon_pitch(to)
     narrowest = min((a for a in alphas if a > 0), default=1.0)
@@ -145,10 +143,13 @@ def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alp
         faces = np.stack(cube_faces(to, level0))
         rotation = np.eye(3)
     else:
-        cube = get_layout("cube-faces")
-        sgeo = kernel_geometry(source.layout, source.size, source.guard)
-        mosaic, _, _ = _run_direct(source.pixels, sgeo, rot, kernel_geometry(cube, p, 0),
-                                   False, (p, 6 * p), (1.0, 1.0), 0, 1)  # fmt: skip
+        mosaic = np.empty((p, 6 * p, nch), np.float32)
+        no_rips = np.zeros((1, 1, nch), np.float32)
+        kernels.resample_rows(
+            source.pixels, no_rips, 0, 0, kernel_geometry(source.layout, source.size, source.guard),
+            kernel_geometry("cube-faces", p, 0), 1.0, 1.0, 0, kernels.FILTER_BILINEAR,
+            np.ascontiguousarray(rot, np.float64), False, mosaic,
+        )  # fmt: skip
         faces = mosaic.reshape(p, 6, p, nch).transpose(1, 0, 2, 3)
         rotation = np.eye(3)
     faces = np.ascontiguousarray(faces, np.float32)
