@@ -45,12 +45,12 @@ class SourceHeader:
         from .detect import detect_layout
 
         level = int(options.get("level", 0) or 0)
-        layout = options.get("layout")
-        first = path.replace("{face}", (get_layout(layout).face_names[0] if layout else "px"))
-        if "{face}" in path and layout is None and not os.path.exists(first):
-            layout, first = "paraboloid-split", path.replace("{face}", "front")
-        elif "{face}" in path and layout is None:
-            layout = "cube-faces"
+        layout, first = options.get("layout"), path
+        if "{face}" in path:
+            from .face_files import find_face_files
+
+            found = find_face_files(path, layout, options.get("faces"))
+            layout, first = found.layout, found.paths[0]
         width, height, channels, metadata = io.read_header(first, level)
         guard = int(metadata.get("envconv:guard", 0) or 0)
         if layout is None:
@@ -133,8 +133,9 @@ class Walk:
         else:
             env = None
             size = kwargs.get("size") or default_size(
-                SimpleNamespace(size=self.source.size, layout=self.source.layout), layout
-            )
+                SimpleNamespace(size=self.source.size, layout=self.source.layout), layout,
+                kwargs.get("out_convention"),
+            )  # fmt: skip
         width, height = layout.file_size(size, guard)
         levels = count_levels(width, height, mips)
         record = Output(self.input, layout.name, int(size), guard, width, height, levels)
@@ -154,7 +155,7 @@ class Walk:
         variables = {**path_variables(self.input), **self.pipeline.variables,
                      "layout": record.layout, "size": record.size}  # fmt: skip
         path = step.target(variables)
-        files = _output_paths(record.layout, path, record.levels)
+        files = _output_paths(record.layout, path, record.levels, step.options.get("faces"))
         if self.executing:
             if step.params["makedirs"]:
                 for directory in {os.path.dirname(os.path.abspath(f)) for f in files}:
@@ -174,8 +175,10 @@ class Walk:
         self.current, self.current_written = (record, src if self.executing else None), False
 
 
-def _output_paths(layout: str, path: str, levels: int) -> list[str]:
+def _output_paths(layout: str, path: str, levels: int, faces=None) -> list[str]:
     """io.output_paths, expanding ``{level}`` here if this io does not know it yet."""
+    if faces is not None:
+        return io.output_paths(layout, path, levels, faces=faces)
     if "levels" in inspect.signature(io.output_paths).parameters:
         return io.output_paths(layout, path, levels)
     files = io.output_paths(layout, path)

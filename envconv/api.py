@@ -9,7 +9,7 @@ from typing import Any
 from . import io
 from .resample import convert
 
-__all__ = ["convert_file", "plan_convert"]
+__all__ = ["convert_file", "plan_convert", "route_face_sets"]
 
 log = logging.getLogger(__name__)
 
@@ -34,13 +34,14 @@ def convert_file(
     """
     from .colorflow import plan_output, prepare_input
 
-    resample, write = dict(resample or {}), dict(write or {})
+    read, resample, write = dict(read or {}), dict(resample or {}), dict(write or {})
+    route_face_sets(input_path, read, resample, write)
     to = resample.pop("to")
-    io.output_paths(to, output_path)
+    io.output_paths(to, output_path, faces=write.get("faces"))
     # Fail fast on a bad --bit-depth, --compression or --output-colorspace, before reading.
     plan_output(output_path, "float", {}, write.get("output_colorspace"), write.get("bit_depth"),
                 write.get("ocio_config"), write.get("compression"))  # fmt: skip
-    source = io.read(input_path, **(read or {}))
+    source = io.read(input_path, **read)
     source, notes = prepare_input(source, **(color or {}))
     if warnings is None:
         for note in notes:
@@ -70,8 +71,11 @@ def plan_convert(
 
     read, write, color = dict(read or {}), dict(write or {}), dict(color or {})
     resample = dict(resample or {})
-    output = Pipeline([Read(input_path, **read), Resample(**resample), Write(output_path)]).plan()[0]
-    first = _first_file(os.fspath(input_path), read.get("layout"))
+    route_face_sets(input_path, read, resample, write)
+    faces = {"faces": write["faces"]} if write.get("faces") else {}
+    output = Pipeline([Read(input_path, **read), Resample(**resample),
+                       Write(output_path, **faces)]).plan()[0]  # fmt: skip
+    first = _first_file(os.fspath(input_path), read.get("layout"), read.get("faces"))
     _, _, channels, metadata = io.read_header(first, int(read.get("level", 0) or 0))
     pixel_type = io.read_pixel_type(first)
     config = write.get("ocio_config") or read.get("ocio_config")
@@ -94,14 +98,31 @@ def plan_convert(
     }  # fmt: skip
 
 
-def _first_file(path: str, layout: str | None) -> str:
+def _first_file(path: str, layout: str | None, faces=None) -> str:
     """The file whose header stands for a (possibly ``{face}``) input path."""
     if "{face}" not in path:
         return path
+    from .face_files import find_face_files
+
+    return find_face_files(path, layout, faces).paths[0]
+
+
+def route_face_sets(input_path, read: dict, resample: dict, write: dict) -> None:
+    """Move a convention that names a skybox face set from resampling to reading or writing.
+
+    ``in_convention`` goes to ``read["faces"]`` when the input is a ``{face}`` path of cube
+    faces, and ``out_convention`` to ``write["faces"]`` when the output layout is cube-faces:
+    a face set names files and turns faces (:mod:`envconv.facesets`), which only reading and
+    writing can do. Other conventions (``unreal`` on a lat-long, …) stay with resampling.
+    The dicts are changed in place.
+    """
+    from .facesets import is_face_set
     from .layouts import get_layout
 
-    names = get_layout(layout).face_names if layout else ("px", "front")
-    for name in names:
-        if os.path.exists(path.replace("{face}", name)):
-            return path.replace("{face}", name)
-    return path.replace("{face}", names[0])
+    cin, cout = resample.get("in_convention"), resample.get("out_convention")
+    if (is_face_set(cin) and "{face}" in os.fspath(input_path) and not read.get("faces")
+            and read.get("layout") in (None, "cube-faces")):  # fmt: skip
+        read["faces"] = resample.pop("in_convention")
+    if (is_face_set(cout) and resample.get("to") is not None and not write.get("faces")
+            and get_layout(resample["to"]).name == "cube-faces"):  # fmt: skip
+        write["faces"] = resample.pop("out_convention")

@@ -46,9 +46,21 @@ preset             layouts                           M (as AXES)            note
 ``probe-back``     sphere, angular                   ``x,y,z``              GL_SPHERE_MAP, Debevec,
                                                                             OIIO, Blender, USD
 ``probe-forward``  sphere, angular                   ``x,y,-z``             skylibs, ffmpeg ball
+``pbrt``           equal-area                        ``-z,y,-x``            pbrt-v4 image infinite
+                                                                            light; default N: the
+                                                                            lat-long's width
+``ddgi``           octahedral                        ``x,-z,y``             DDGI/RTXGI, Y-up RH
+``ddgi-z-up``      octahedral                        ``x,y,z``              DDGI/RTXGI, Z-up RH
+``unreal``         octahedral                        ``z,y,x``              RTXGI in Unreal
 =================  ================================  =====================  ========================
 
 A preset rejects every other layout with a one-line :class:`~envconv.errors.LayoutError`.
+
+Octahedral squares: pbrt-v4 (``util/math.cpp``, ``cmd/imgtool.cpp``) reads a lat-long at
+(atan2(y, x)/2π mod 1, acos(z)/π) for its direction e, which is envconv's w = (e_y, e_z, −e_x);
+its square is envconv's equal-area transposed. ``imgtool makeequiarea`` makes the square as
+wide as the lat-long, so with ``pbrt`` the default N is the width of the lat-long envconv
+would make from the source. DDGI/RTXGI store world t at d = (t_x, t_z, −t_y).
 
 AXES, a signed permutation written ``"-x,z,y"``, lists envconv's x, y and z in terms of the
 tool's (file's) coordinates: ``"-x,z,y"`` means w = (−x_t, z_t, y_t). As a convention it is M
@@ -106,11 +118,15 @@ class Convention:
         orientation (cell rotations of the layout undone). None when cells are unchanged.
     name : str
         The preset name or AXES string it came from.
+    size_rule : str or None
+        How the tool sizes its files when no size is given: ``"latlong-width"`` (N is the
+        width of the lat-long envconv would make from the source), or None for envconv's rule.
     """
 
     matrix: np.ndarray
     remap: tuple[tuple[int, int], ...] | None = None
     name: str = _IDENTITY
+    size_rule: str | None = None
 
     @property
     def is_identity(self) -> bool:
@@ -119,12 +135,13 @@ class Convention:
 
 @dataclass(frozen=True)
 class Preset:
-    """A named convention: per-layout AXES strings and cell remaps, plus its documentation."""
+    """A named convention: per-layout AXES strings, cell remaps and size rules, and its tool."""
 
     name: str
     tool: str
     layouts: dict[str, str]
     remaps: dict[str, tuple[tuple[int, int], ...]] = field(default_factory=dict)
+    sizes: dict[str, str] = field(default_factory=dict)
 
 
 # OpenEXR faces in the six slots of a GL-table layout → envconv's faces (module docstring).
@@ -166,8 +183,8 @@ _PRESET_LIST = (
     ),
     Preset(
         "unreal",
-        "Unreal long-lat cubemap import (Z-up LH, X forward, Y right): latlong",
-        {"latlong": "z,y,-x"},
+        "Unreal (Z-up LH, X forward, Y right): long-lat cubemap import; RTXGI octahedral probes",
+        {"latlong": "z,y,-x", "octahedral": "z,y,x"},
     ),
     Preset(
         "ffmpeg",
@@ -189,11 +206,30 @@ _PRESET_LIST = (
         "mirror-ball/angular maps whose centre is forward -Z, unmirrored (skylibs, ffmpeg ball)",
         {"sphere": "x,y,-z", "angular": "x,y,-z"},
     ),
+    Preset(
+        "pbrt",
+        "pbrt-v4 image infinite light: the equal-area square of imgtool makeequiarea",
+        {"equal-area": "-z,y,-x"},
+        sizes={"equal-area": "latlong-width"},
+    ),
+    Preset(
+        "ddgi",
+        "DDGI/RTXGI octahedral probes (+Z centre) in a Y-up right-handed world",
+        {"octahedral": "x,-z,y"},
+    ),
+    Preset(
+        "ddgi-z-up",
+        "DDGI/RTXGI octahedral probes (+Z centre) in a Z-up right-handed world",
+        {"octahedral": _IDENTITY},
+    ),
 )
 
 #: Every preset by name.
 PRESETS: dict[str, Preset] = {p.name: p for p in _PRESET_LIST}
-_ALIASES = {"none": "envconv", "identity": "envconv", "usd": "openexr", "filament": "cmft"}
+_ALIASES = {
+    "none": "envconv", "identity": "envconv", "usd": "openexr", "filament": "cmft",
+    "pbrt-v4": "pbrt", "rtxgi": "ddgi", "rtxgi-z-up": "ddgi-z-up",
+}  # fmt: skip
 
 
 def preset_names() -> list[str]:
@@ -296,7 +332,12 @@ def resolve_convention(spec, layout: Layout | str) -> Convention:
         raise LayoutError(
             f"convention {name} applies to {', '.join(preset.layouts)}, not {layout.name}"
         )
-    return Convention(parse_axes(preset.layouts[layout.name]), preset.remaps.get(layout.name), name)
+    return Convention(
+        parse_axes(preset.layouts[layout.name]),
+        preset.remaps.get(layout.name),
+        name,
+        preset.sizes.get(layout.name),
+    )
 
 
 def environment_axes(up: str | None = None, axes: str | None = None) -> np.ndarray:

@@ -6,8 +6,11 @@ Order: the ``envconv:layout`` tag (with ``envconv:guard``), then OpenEXR's ``env
 layout has are guessed: 3:4 cube-vcross, 4:3 cube-hcross, 6:1 cube-hstrip, 3:2 tennisball.
 Shared aspects are refused with a message naming the candidates, except 2:1: a 2:1 image is a
 lat-long unless it is black outside two inscribed disks, which is what an untagged packed
-paraboloid looks like; then it is ambiguous too. 1:1 (sphere or angular) and 1:6 (cube-vstrip or
-cube-exr) always need ``--from``.
+paraboloid looks like; then it is ambiguous too. 1:1 (sphere, angular, octahedral or
+equal-area) and 1:6 (cube-vstrip or cube-exr) always need ``--from``. No pixel test tells the
+square layouts apart: the two octahedral squares fill every pixel with the same kind of sky, and
+pbrt-v4's ``imgtool makeequiarea`` writes no attribute that names its layout, so a pbrt file
+is read with ``--from equal-area --in-convention pbrt``.
 """
 
 from __future__ import annotations
@@ -27,7 +30,10 @@ _UNIQUE_ASPECTS = {
     (6, 1): "cube-hstrip",
     (3, 2): "tennisball",
 }
-_SHARED_ASPECTS = {(1, 1): ("sphere", "angular"), (1, 6): ("cube-vstrip", "cube-exr")}
+_SHARED_ASPECTS = {
+    (1, 1): ("sphere", "angular", "octahedral", "equal-area"),
+    (1, 6): ("cube-vstrip", "cube-exr"),
+}
 
 
 def detect_layout(
@@ -55,7 +61,7 @@ def _from_aspect(width: int, height: int, pixels: np.ndarray | None) -> Layout:
     for (aw, ah), names in _SHARED_ASPECTS.items():
         if width * ah == height * aw:
             raise LayoutError(
-                f"input is {width}x{height}: aspect {aw}:{ah} could be {' or '.join(names)} "
+                f"input is {width}x{height}: aspect {aw}:{ah} could be {_alternatives(names)} "
                 "and the file has no layout metadata; pass --from"
             )
     if width == 2 * height:
@@ -66,6 +72,10 @@ def _from_aspect(width: int, height: int, pixels: np.ndarray | None) -> Layout:
             )
         return get_layout("latlong")
     raise LayoutError(f"input is {width}x{height}, which matches no layout's aspect; pass --from")
+
+
+def _alternatives(names) -> str:
+    return " or ".join(names) if len(names) < 3 else f"{', '.join(names[:-1])} or {names[-1]}"
 
 
 def _black_outside_two_disks(pixels: np.ndarray) -> bool:

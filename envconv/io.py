@@ -5,7 +5,9 @@ extension. Pixels are always float32 in memory, in scene-linear Rec.709: :func:`
 :func:`write` convert colour, range and bit depth through :mod:`envconv.colorflow`.
 
 Multi-file layouts (cube-faces, paraboloid-split) name their parts with ``{face}`` in the path:
-px nx py ny pz nz, or front back.
+px nx py ny pz nz, or front back. ``faces=`` names another program's skybox files and face
+orientations (Quake's ft bk lf rt up dn, Unity's Front …: :mod:`envconv.facesets`); reading
+finds the set from the files that exist when it is not given (:mod:`envconv.face_files`).
 
 Every output is written to a temporary file in the destination directory and renamed into place,
 so a failure never leaves a partial file, and inputs are never opened for writing.
@@ -62,6 +64,7 @@ def read(
     level: int = 0,
     input_colorspace: str | None = None,
     ocio_config: str | os.PathLike | None = None,
+    faces: str | None = None,
 ) -> EnvMap:
     """Read an environment map, in scene-linear float32 (linear Rec.709).
 
@@ -78,6 +81,11 @@ def read(
         ``oiio:ColorSpace``, else linear for float/half and sRGB for 8/16-bit data.
     ocio_config : str or path, optional
         OpenColorIO config; default ``$OCIO``, else ``ocio://default``.
+    faces : str, optional
+        Face set of a ``{face}`` path of six skybox files (``quake``, ``unity-6sided``,
+        ``threejs``, ``godot``, ``unreal``, ``envconv``; see :mod:`envconv.facesets`). Each
+        file is turned into envconv's face, so the result is an ordinary ``cube-faces`` map.
+        Default: found from the file names; several matching sets are a LayoutError.
 
     Pixels are converted to linear Rec.709 by :func:`envconv.colorflow.to_working`. A
     lat-long stored with edge-aligned samples (``oiio:sampleborder``, as OpenEXR envmaps
@@ -88,7 +96,9 @@ def read(
 
     path = os.fspath(path)
     if "{face}" in path:
-        return to_working(_read_multi(path, layout, level), input_colorspace, ocio_config)
+        return to_working(_read_multi(path, layout, level, faces), input_colorspace, ocio_config)
+    if faces is not None:
+        raise LayoutError(f"a face set ({faces}) needs {{face}} in the path, e.g. sky_{{face}}.hdr")
     if layout is not None and get_layout(layout).multi_file:
         raise LayoutError(f"layout {layout} is stored as several files; put {{face}} in the path")
     pixels, channels, metadata, pixel_type = read_image(path, level)
@@ -112,25 +122,17 @@ def read(
     return to_working(envmap, input_colorspace, ocio_config)
 
 
-def _read_multi(template: str, layout: str | None, level: int) -> EnvMap:
-    if layout is None:
-        first = _part_path(template, "px")
-        layout = "cube-faces" if os.path.exists(first) else "paraboloid-split"
-    found = get_layout(layout)
-    if not found.multi_file:
-        raise LayoutError(f"{{face}} in the path needs a multi-file layout, not {found.name}")
-    parts = []
-    for name in found.face_names:
-        parts.append(read_image(_part_path(template, name), level))
-    shapes = {p[0].shape for p in parts}
-    if len(shapes) != 1:
-        raise ImageIOError(f"the {found.name} parts of {template} differ in size or channels")
-    pixels, channels, metadata, pixel_type = parts[0]
+def _read_multi(template: str, layout: str | None, level: int, faces=None) -> EnvMap:
+    from .face_files import read_face_files
+
+    mosaic, channels, metadata, pixel_type, name = read_face_files(
+        template, layout, level, faces, read_image
+    )
+    found = get_layout(name)
     guard = int(metadata.get("envconv:guard", 0) or 0)
     if metadata.get("envconv:layout") != found.name:
         guard = 0
     guard >>= level + int(metadata.get("envconv:level", 0) or 0)
-    mosaic = np.concatenate([p[0] for p in parts], axis=1)
     found.size_from_image(mosaic.shape[1], mosaic.shape[0], guard)
     return EnvMap(mosaic, found, guard, channels, _content_metadata(metadata), pixel_type)
 
@@ -142,8 +144,9 @@ def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
     """
     path = os.fspath(path)
     if "{face}" in path:
-        first = _part_path(path, "px")
-        path = first if os.path.exists(first) else _part_path(path, "front")
+        from .face_files import find_face_files
+
+        path = find_face_files(path).paths[0]
     if path.lower().endswith(".exr") and os.path.isfile(path):
         plain = _read_plain_exr_header(path)  # a plain file has no MIP levels
         if plain is not None:
@@ -168,11 +171,12 @@ def _content_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1) -> list[str]:
+def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=None) -> list[str]:
     """Files that writing a map of this layout to ``path`` produces.
 
     With ``{level}`` in the path every one of ``levels`` mip levels is a file of its own
-    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``.
+    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``. ``faces``
+    names the files of a ``cube-faces`` map by a face set (:mod:`envconv.facesets`).
     """
     path = os.fspath(path)
     if Path(path).suffix.lower() in CONTAINER_FORMATS:
@@ -184,21 +188,34 @@ def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1) -> lis
         return [
             p
             for k in range(max(int(levels), 1))
-            for p in output_paths(envmap_layout, path.replace("{level}", str(k)))
+            for p in output_paths(envmap_layout, path.replace("{level}", str(k)), faces=faces)
         ]
     layout = get_layout(envmap_layout)
+    names = _face_names(layout, faces)
     if layout.multi_file:
         if "{face}" not in path:
             raise LayoutError(
                 f"layout {layout.name} writes {len(layout.face_names)} files; "
                 "put {face} in the output path, e.g. sky_{face}.exr"
             )
-        return [_part_path(path, name) for name in layout.face_names]
+        return [_part_path(path, name) for name in names]
     if "{face}" in path:
         raise LayoutError(
             f"{{face}} in the output path needs a multi-file layout, not {layout.name}"
         )
     return [path]
+
+
+def _face_names(layout, faces) -> tuple[str, ...]:
+    """File-name parts of a layout's faces, or of a face set's files (cube-faces only)."""
+    if faces is None:
+        return layout.face_names
+    from .facesets import get_face_set
+
+    face_set = get_face_set(faces)
+    if layout.name != "cube-faces":
+        raise LayoutError(f"face set {face_set.name} applies to cube-faces, not {layout.name}")
+    return face_set.names
 
 
 def _format_of(path: str):
@@ -236,6 +253,7 @@ def write(
     dither: bool = True,
     ocio_config: str | os.PathLike | None = None,
     warnings: list[str] | None = None,
+    faces: str | None = None,
 ) -> list[str]:
     """Write ``envmap`` to ``path`` (one file, or one per face with ``{face}``).
 
@@ -250,8 +268,9 @@ def write(
     A map with a mip chain (``envmap.levels``) is written as one MIP-mapped file (EXR: tiled
     MIPMAP_LEVELS, ROUND_DOWN, every level down to 1 × 1; TIFF: one directory per level), or
     as one file per level when the path holds ``{level}`` (any format; each file is tagged
-    ``envconv:level``). Alpha is written unassociated (never premultiplied). Returns the paths
-    written.
+    ``envconv:level``). Alpha is written unassociated (never premultiplied). ``faces`` writes a
+    ``cube-faces`` map as another program's six skybox files (names and face turns of
+    :mod:`envconv.facesets`). Returns the paths written.
     """
     from .colorflow import encode_output
 
@@ -267,14 +286,14 @@ def write(
     if encoded.plan.format in ("dds", "ktx2"):
         return [_write_container(envmap, os.fspath(path), encoded.plan.format, levels)]
     per_level = "{level}" in os.fspath(path)
-    paths = output_paths(envmap.layout, path, len(levels) if per_level else 1)
+    paths = output_paths(envmap.layout, path, len(levels) if per_level else 1, faces=faces)
     layout = envmap.layout
-    faces = list(layout.face_names) if layout.multi_file else [None]
-    cells = [_cells(layout, level) for level in levels]
+    cells = [_cells(layout, level, faces) for level in levels]
+    names = list(_face_names(layout, faces)) if layout.multi_file else [None]
     if per_level:
-        jobs = [([cells[k][f]], k, faces[f]) for k in range(len(levels)) for f in range(len(faces))]
+        jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
     else:
-        jobs = [([cell[f] for cell in cells], None, faces[f]) for f in range(len(faces))]
+        jobs = [([cell[f] for cell in cells], None, names[f]) for f in range(len(names))]
     temps: list[tuple[str, str]] = []
     try:
         for target, (images, level, face) in zip(paths, jobs, strict=True):
@@ -315,12 +334,18 @@ def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarra
     return path
 
 
-def _cells(layout, pixels: np.ndarray) -> list[np.ndarray]:
-    """The per-file images of one level: the whole image, or each cell of a multi-file map."""
+def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
+    """The per-file images of one level: the whole image, or each cell of a multi-file map
+    (turned into the face set's orientation when ``faces`` names one)."""
     if not layout.multi_file:
         return [pixels]
     cw, ch = pixels.shape[1] // layout.columns, pixels.shape[0] // layout.rows
-    return [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
+    cells = [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
+    if faces is None:
+        return cells
+    from .facesets import from_envconv
+
+    return from_envconv(faces, cells)
 
 
 def _temp_path(target: str) -> str:

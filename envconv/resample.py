@@ -60,9 +60,12 @@ FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
 MAX_SAMPLES = 32
 
 
-def default_size(source: EnvMap, to: Layout | str) -> int:
-    """Output N that keeps the source's horizon pitch (see module docstring)."""
+def default_size(source: EnvMap, to: Layout | str, out_convention=None) -> int:
+    """Output N that keeps the source's horizon pitch (see module docstring), or the rule of
+    ``out_convention``'s tool: ``pbrt`` makes the square as wide as the lat-long would be."""
     to = get_layout(to)
+    if resolve_convention(out_convention, to).size_rule == "latlong-width":
+        return 2 * default_size(source, "latlong")
     n = source.size * horizon_pitch(to) / horizon_pitch(source.layout)
     return max(1, int(round(n)))
 
@@ -173,7 +176,7 @@ def convert(
     if filter not in FILTERS:
         raise UsageError(f"unknown filter {filter!r}; choose one of {', '.join(FILTERS)}")
     if size is None:
-        size = default_size(envmap, to)
+        size = default_size(envmap, to, cout)
     if not isinstance(size, (int, np.integer)) or size < 1:
         raise LayoutError(f"size must be a positive integer, got {size!r}")
     n_samples = _check_samples(samples)

@@ -25,7 +25,7 @@ ROWS = [
     ["latlong", "tennisball"],
     ["cube-vcross", "cube-hcross", "cube-exr"],
     ["cube-hstrip"],
-    ["sphere", "angular", "paraboloid"],
+    ["sphere", "angular", "paraboloid", "octahedral", "equal-area"],
 ]
 
 

@@ -21,6 +21,7 @@ __all__ = [
     "image_size",
     "face_to_dir",
     "face_density",
+    "fold_square",
     "uv_to_dir",
     "subsample_uv",
     "sample_latlong",
@@ -61,8 +62,11 @@ GRIDS = {
     "paraboloid": ("paraboloid", 2, 1, 1, ((0, 0, 0, False), (1, 0, 1, False))),
     "paraboloid-split": ("paraboloid", 2, 1, 1, ((0, 0, 0, False), (1, 0, 1, False))),
     "tennisball": ("tennisball", 1, 2, 3, ((0, 0, 0, False), (0, 1, 1, False))),
+    "octahedral": ("octahedral", 1, 1, 1, ((0, 0, 0, False),)),
+    "equal-area": ("equal-area", 1, 1, 1, ((0, 0, 0, False),)),
 }
 DISK_FAMILIES = ("sphere", "angular", "paraboloid")
+OCTAHEDRAL_FAMILIES = ("octahedral", "equal-area")
 
 
 def image_size(name: str, n: int) -> tuple[int, int]:
@@ -105,6 +109,56 @@ def _cube_exr(face, a, b):
     return _normalise(x, y, z)
 
 
+def fold_square(a, b):
+    """The octahedral fold: a point past the square's edge is the point mirrored across that edge
+    and across the edge's midpoint, (a, b) → (±2 − a, −b) or (−a, ±2 − b), until inside.
+
+    Written from the rule that both edge halves show the same directions (an edge point (1, b)
+    and (1, −b) are one direction); pbrt-v4's WrapEqualAreaSquare states the same rule in (u, v).
+    """
+    a = np.asarray(a, np.float64)
+    b = np.asarray(b, np.float64)
+    for _ in range(4):
+        a, b = (np.where(a > 1, 2 - a, np.where(a < -1, -2 - a, a)),
+                np.where((a > 1) | (a < -1), -b, b))  # fmt: skip
+        a, b = (np.where((b > 1) | (b < -1), -a, a),
+                np.where(b > 1, 2 - b, np.where(b < -1, -2 - b, b)))  # fmt: skip
+    return a, b
+
+
+def _octahedron_point(a, b):
+    """Point (c_x, c_y, c_z) of the octahedron |x| + |y| + |z| = 1 over square point (a, b), with
+    the lower half (c_z < 0) unfolded from the square's corners (Cigolle et al. 2014)."""
+    upper = np.abs(a) + np.abs(b) <= 1
+    sa = np.where(a >= 0, 1.0, -1.0)
+    sb = np.where(b >= 0, 1.0, -1.0)
+    cx = np.where(upper, a, sa * (1 - np.abs(b)))
+    cy = np.where(upper, b, sb * (1 - np.abs(a)))
+    return cx, cy, 1 - np.abs(a) - np.abs(b)
+
+
+def _octahedral_family(family, a, b):
+    """Directions of the two octahedral squares, in the z-up frame of the papers, then turned
+    into envconv's: the papers' +Z (the square's centre) is +Y, their +X (right) is +X and their
+    +Y (down) is −Z, i.e. d = (t_x, t_z, −t_y)."""
+    a, b = fold_square(a, b)
+    cx, cy, cz = _octahedron_point(a, b)
+    if family == "octahedral":
+        t = _normalise(cx, cy, cz)
+    else:
+        # Clarberg 2008: the L1 radius r of the point on the diamond fixes the polar angle
+        # (z = 1 − r², equal-area), and its position along the diamond's edge the azimuth.
+        r = np.abs(cx) + np.abs(cy)
+        along = np.abs(cy) / np.where(r > 0, r, 1.0)
+        psi = 0.5 * math.pi * along
+        sin_theta = r * np.sqrt(2 - r * r)
+        tz = np.where(cz >= 0, 1.0, -1.0) * (1 - r * r)
+        sx = np.where(cx >= 0, 1.0, -1.0)
+        sy = np.where(cy >= 0, 1.0, -1.0)
+        t = np.stack([sx * np.cos(psi) * sin_theta, sy * np.sin(psi) * sin_theta, tz], -1)
+    return np.stack([t[..., 0], t[..., 2], -t[..., 1]], -1)
+
+
 def face_to_dir(family: str, face, a, b) -> np.ndarray:
     """Unit direction (..., 3) of local point (a, b) of ``face`` (inside the valid region)."""
     face = np.asarray(face)
@@ -133,6 +187,8 @@ def face_to_dir(family: str, face, a, b) -> np.ndarray:
         s = 1 + r2
         z = np.where(face == 0, 1 - r2, -(1 - r2))
         return np.stack([2 * X / s, 2 * Y / s, z / s], -1)
+    if family in OCTAHEDRAL_FAMILIES:
+        return _octahedral_family(family, a, b)
     if family == "tennisball":
         phi = (0.5 - (a + 1) / 2) * (1.5 * math.pi)
         theta = (0.5 - (b + 1) / 2) * (0.5 * math.pi)
@@ -162,6 +218,11 @@ def face_density(family: str, face, a, b) -> np.ndarray:
         return np.where(r > 1e-12, math.pi * np.sin(math.pi * r) / np.where(r > 0, r, 1), math.pi**2)
     if family == "paraboloid":
         return 4.0 / (1 + r2) ** 2
+    if family == "equal-area":  # 4π over the area-4 square, everywhere
+        return np.full_like(r2, math.pi)
+    if family == "octahedral":  # a plane patch at distance |c| seen at cos = 1/(√3 |c|)
+        cx, cy, cz = _octahedron_point(*fold_square(a, b))
+        return (cx * cx + cy * cy + cz * cz) ** -1.5
     if family == "tennisball":  # dΩ = cos θ dφ dθ, dφ = 3π/4 da, dθ = π/4 db
         return np.abs(np.cos(0.25 * math.pi * b)) * (0.75 * math.pi * 0.25 * math.pi)
     raise ValueError(family)

@@ -69,8 +69,9 @@ def test_disk_alpha_is_the_analytic_coverage(sky, name, guard):
 
 @pytest.mark.parametrize("guard", [0, 2, "fill"])
 @pytest.mark.parametrize(
-    "name", ["cube-vcross", "cube-hcross", "cube-hstrip", "cube-exr", "latlong", "tennisball"]
-)
+    "name", ["cube-vcross", "cube-hcross", "cube-hstrip", "cube-exr", "latlong", "tennisball",
+             "octahedral", "equal-area"]
+)  # fmt: skip
 def test_cell_alpha_is_exact(sky, name, guard):
     g = 0 if guard == "fill" else guard
     out = envconv.convert(sky, name, size=8, samples=3, guard=guard, alpha=True)

@@ -9,6 +9,7 @@ tool's preset, must equal the same environment sampled through envconv's own geo
 from __future__ import annotations
 
 import numpy as np
+import ports
 import pytest
 from click.testing import CliRunner
 
@@ -35,6 +36,9 @@ LH = lambda d: d * [-1.0, 1.0, 1.0]  # noqa: E731  Unity, cmft, D3D
 BLENDER = lambda d: np.stack([d[..., 0], d[..., 2], -d[..., 1]], -1)  # noqa: E731
 UNREAL = lambda d: np.stack([-d[..., 1], d[..., 2], d[..., 0]], -1)  # noqa: E731
 FFMPEG = lambda d: d * [1.0, -1.0, -1.0]  # noqa: E731
+# pbrt-v4 reads a lat-long at (atan2(y, x)/2π, acos(z)/π) (imgtool makeequiarea); by
+# CONVENTIONS.md's lat-long formulas that point is (e_y, e_z, −e_x) (tests/test_octahedral.py).
+PBRT = lambda e: np.stack([e[..., 1], e[..., 2], -e[..., 0]], -1)  # noqa: E731
 
 
 def env(w):
@@ -215,6 +219,18 @@ def angular_skylibs(n):
     return np.stack([np.sin(phi) * np.cos(az), np.sin(phi) * np.sin(az), -np.cos(phi)], -1)
 
 
+# ---- octahedral squares (tests/ports.py: RTXGI's and pbrt-v4's own functions) -----------------
+def octahedral_ddgi(n):
+    """Texel (i, j) holds DDGIGetOctahedralDirection of its normalized coordinates."""
+    i, j = np.meshgrid(np.arange(n), np.arange(n))
+    return ports.ddgi_direction(*ports.ddgi_normalized_coordinates(i, j, n))
+
+
+def equal_area_pbrt(n):
+    u, v = _uv(n, n)
+    return PBRT(ports.equal_area_square_to_sphere(np.stack([u, v], -1)))
+
+
 # (preset, layout, synthesiser, N, exact): exact cases are pixel-aligned (no interpolation).
 CASES = [
     ("blender", "latlong", latlong_blender, NL, True),
@@ -243,6 +259,10 @@ CASES = [
     ("ffmpeg", "sphere", sphere_ffmpeg, ND, False),
     ("probe-forward", "sphere", sphere_skylibs, ND, False),
     ("probe-forward", "angular", angular_skylibs, ND, False),
+    ("ddgi", "octahedral", octahedral_ddgi, ND, False),  # Y-up RH: centre +Z
+    ("ddgi-z-up", "octahedral", lambda n: BLENDER(octahedral_ddgi(n)), NC, True),
+    ("unreal", "octahedral", lambda n: UNREAL(octahedral_ddgi(n)), NC, True),
+    ("pbrt", "equal-area", equal_area_pbrt, NC, True),
 ]
 IDS = [f"{p}-{lay}" for p, lay, *_ in CASES]
 

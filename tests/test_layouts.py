@@ -17,6 +17,7 @@ from envconv.layouts import LAYOUTS, get_layout
 ISSUE_LAYOUTS = [
     "latlong", "cube-vcross", "cube-hcross", "cube-hstrip", "cube-vstrip", "cube-exr",
     "cube-faces", "sphere", "angular", "paraboloid", "paraboloid-split", "tennisball",
+    "octahedral", "equal-area",
 ]  # fmt: skip
 
 AXES = {
@@ -29,6 +30,7 @@ AXES = {
     "q": (0.48, 0.6, 0.64),
 }
 TOP, BOTTOM, RIM = "top row", "bottom row", "rim"
+CORNERS = [(0, 0), (1, 0), (0, 1), (1, 1)]  # the octahedral squares' -Y: any of the four
 
 # The table "Where known directions land (u, v)" of CONVENTIONS.md, copied verbatim.
 TABLE = {
@@ -50,6 +52,8 @@ TABLE = {
                    (0.3232, 0.3171)],
     "tennisball": [(0.1667, 0.25), (0.8333, 0.25), (0.1667, 0.75), (0.8333, 0.75), (0.5, 0.25),
                    (0.5, 0.75), (0.3634, 0.04517)],
+    "octahedral": [(1, 0.5), (0, 0.5), (0.5, 0.5), CORNERS, (0.5, 0), (0.5, 1), (0.6395, 0.314)],
+    "equal-area": [(1, 0.5), (0, 0.5), (0.5, 0.5), CORNERS, (0.5, 0), (0.5, 1), (0.6295, 0.3133)],
 }  # fmt: skip
 
 
@@ -67,6 +71,7 @@ SIZE_RULE = {
     "latlong": (2, 1), "cube-vcross": (3, 4), "cube-hcross": (4, 3), "cube-hstrip": (6, 1),
     "cube-vstrip": (1, 6), "cube-exr": (1, 6), "cube-faces": (6, 1), "sphere": (1, 1),
     "angular": (1, 1), "paraboloid": (2, 1), "paraboloid-split": (2, 1), "tennisball": (3, 2),
+    "octahedral": (1, 1), "equal-area": (1, 1),
 }  # fmt: skip
 MULTI_FILE = {"cube-faces": 6, "paraboloid-split": 2}
 DISKS = ("sphere", "angular", "paraboloid", "paraboloid-split")

@@ -38,7 +38,8 @@ def test_level_sizes_round_down_to_one():
 
 
 CASES = [("cube-vcross", 16, 0), ("paraboloid", 30, 1), ("sphere", 32, "fill"),
-         ("cube-faces", 10, 0), ("latlong", 16, 2), ("tennisball", 16, 2), ("angular", 20, 0)]  # fmt: skip
+         ("cube-faces", 10, 0), ("latlong", 16, 2), ("tennisball", 16, 2), ("angular", 20, 0),
+         ("octahedral", 16, 0), ("equal-area", 14, 1)]  # fmt: skip
 
 
 @pytest.mark.parametrize("name, n, guard", CASES)
@@ -62,7 +63,8 @@ def test_every_level_matches_a_direct_computation(sky, name, n, guard):
 
 @pytest.mark.parametrize("name, n", [("cube-vcross", 16), ("cube-hcross", 16), ("paraboloid", 32),
                                      ("sphere", 32), ("angular", 32), ("latlong", 16),
-                                     ("cube-exr", 16)])  # fmt: skip
+                                     ("cube-exr", 16), ("octahedral", 16),
+                                     ("equal-area", 16)])  # fmt: skip
 def test_solid_angle_mean_is_kept_at_every_level(sky, name, n):
     chain = envconv.convert(sky, name, size=n, mips=True)
     truth = sphere_mean(smooth_radiance)

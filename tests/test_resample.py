@@ -25,7 +25,7 @@ N_LATLONG = 64  # the analytic lat-long source is 128 × 64
 SIZES = {
     "latlong": 64, "cube-vcross": 34, "cube-hcross": 34, "cube-hstrip": 34, "cube-vstrip": 34,
     "cube-exr": 34, "cube-faces": 34, "sphere": 96, "angular": 96, "paraboloid": 48,
-    "paraboloid-split": 48, "tennisball": 48,
+    "paraboloid-split": 48, "tennisball": 48, "octahedral": 64, "equal-area": 72,
 }  # fmt: skip
 CUBES = [name for name in NAMES if name.startswith("cube")]
 
@@ -162,7 +162,8 @@ def _near_and_interior_rms(error, near, interior):
     return math.sqrt(np.mean(error[near] ** 2)), math.sqrt(np.mean(error[interior] ** 2))
 
 
-SEAM_LAYOUTS = CUBES + ["paraboloid", "paraboloid-split", "tennisball"]
+# The octahedral squares' edges are folds: a tap past one reads the mirrored edge.
+SEAM_LAYOUTS = CUBES + ["paraboloid", "paraboloid-split", "tennisball", "octahedral", "equal-area"]
 
 
 # Below this RMS (radiance ~1) both errors are sub-sampling noise.

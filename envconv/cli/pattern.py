@@ -31,7 +31,7 @@ __all__ = ["pattern_command"]
     "--out-convention",
     "convention",
     metavar="NAME|AXES",
-    help="Draw for another tool's convention (blender, cmft, skylibs, unity, unreal, ffmpeg, ...).",
+    help="Draw for another tool's convention (blender, cmft, skylibs, unity, unreal, ffmpeg, ...), or with --to cube-faces a skybox face set (quake, unity-6sided, threejs, godot, unreal).",
 )
 @click.option(
     "--guard",
@@ -54,12 +54,16 @@ def pattern_command(output_path, to, size, samples, convention, guard, alpha, **
     Example:
       envconv pattern grid.exr --to latlong --size 512
       envconv pattern sky_{face}.png --to cube-faces --size 256 --out-convention unity
+      envconv pattern sky_{face}.tga --to cube-faces --out-convention quake
     """
     from .. import io
+    from ..api import route_face_sets
     from ..pattern import render_pattern
 
     _, _, write_kw = split_options(options)
-    io.output_paths(to, output_path)
-    envmap = render_pattern(to, size, samples, convention, guard, alpha)
+    resample_kw = {"to": to, "out_convention": convention}
+    route_face_sets(output_path, {}, resample_kw, write_kw)
+    io.output_paths(to, output_path, faces=write_kw.get("faces"))
+    envmap = render_pattern(to, size, samples, resample_kw.get("out_convention"), guard, alpha)
     for path in io.write(envmap, output_path, **write_kw):
         click.echo(path)

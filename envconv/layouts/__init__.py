@@ -16,7 +16,9 @@ from . import (
     cube_hcross,
     cube_strip,
     cube_vcross,
+    equal_area,
     latlong,
+    octahedral,
     paraboloid,
     paraboloid_split,
     sphere,
@@ -39,6 +41,8 @@ _MODULE_LAYOUTS = (
     paraboloid.LAYOUT,
     paraboloid_split.LAYOUT,
     tennisball.LAYOUT,
+    octahedral.LAYOUT,
+    equal_area.LAYOUT,
 )
 
 #: Every registered layout, by name, in documentation order.

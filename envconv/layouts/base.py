@@ -31,6 +31,8 @@ __all__ = [
     "FAMILY_ANGULAR",
     "FAMILY_PARABOLOID",
     "FAMILY_TENNISBALL",
+    "FAMILY_OCTAHEDRAL",
+    "FAMILY_EQUAL_AREA",
 ]
 
 # Geometry family codes; the native core dispatches on these integers (src/core/layouts.h).
@@ -41,6 +43,8 @@ FAMILY_SPHERE = 3
 FAMILY_ANGULAR = 4
 FAMILY_PARABOLOID = 5
 FAMILY_TENNISBALL = 6
+FAMILY_OCTAHEDRAL = 7
+FAMILY_EQUAL_AREA = 8
 
 # Families whose valid region in a cell is the unit disk a² + b² <= 1.
 DISK_FAMILIES = (FAMILY_SPHERE, FAMILY_ANGULAR, FAMILY_PARABOLOID)

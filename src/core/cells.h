@@ -56,8 +56,8 @@ inline void cell_local(const Geometry& g, int64_t cell, double px, double py, do
 
 // (face, a, b, cell) of image point (px, py); face is -1 in an empty cell.
 inline Located locate(const Geometry& g, double px, double py) {
-    int64_t col = int64_t(std::floor(px / double(g.cell_width())));
-    int64_t row = int64_t(std::floor(py / double(g.cell_height())));
+    int64_t col = floor_index(px / double(g.cell_width()));
+    int64_t row = floor_index(py / double(g.cell_height()));
     col = col < 0 ? 0 : (col > g.columns - 1 ? g.columns - 1 : col);
     row = row < 0 ? 0 : (row > g.rows - 1 ? g.rows - 1 : row);
     Located out;

@@ -13,6 +13,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 
 namespace envconv {
 
@@ -26,9 +27,11 @@ enum Family : int {
     kAngular = 4,
     kParaboloid = 5,
     kTennisball = 6,
+    kOctahedral = 7,
+    kEqualArea = 8,
 };
 
-constexpr int kFamilyCount = 7;
+constexpr int kFamilyCount = 9;
 
 struct Vec3 {
     double x, y, z;
@@ -38,6 +41,16 @@ struct FacePoint {
     int face;
     double a, b;
 };
+
+// floor(x) as an index, without a libm call on the x86-64 baseline (which lacks roundsd).
+// x is clamped to +-2^60 first (NaN to -2^60): far outside every image, so a caller's bounds
+// checks send such values to the clamped slow path.
+inline int64_t floor_index(double x) {
+    constexpr double kFar = 1152921504606846976.0;  // 2^60
+    x = std::min(kFar, std::max(-kFar, x));          // NaN compares false: -2^60
+    int64_t i = int64_t(x);
+    return i - int64_t(x < double(i));
+}
 
 inline Vec3 normalized(double x, double y, double z) {
     double inv = 1.0 / std::sqrt(x * x + y * y + z * z);
@@ -244,6 +257,118 @@ inline double density(int, double, double b) {
 }
 }  // namespace tennisball
 
+// The two octahedral squares (one N x N cell each) share the papers' z-up frame t: the square's
+// centre is t = +Z, a (right) runs along +X_t and b (down) along +Y_t; the diamond
+// |a| + |b| <= 1 holds t_z >= 0 and the four corner triangles t_z < 0. envconv's direction is
+// d = (t_x, t_z, -t_y): +Y at the centre, +X at the right edge's midpoint, +Z at the top edge's,
+// -Y at every corner (the sky seen from inside looking up, +Z at the top, unmirrored).
+namespace octa {
+inline double sign_not_zero(double v) { return v >= 0.0 ? 1.0 : -1.0; }
+// The octahedral fold, the continued map of both squares: the two halves of each edge hold the
+// same directions ((1, b) and (1, -b) are one), so a point past an edge is the point mirrored
+// across that edge and across its midpoint: (a, b) -> (2 - a, -b) past a = 1, (-2 - a, -b) past
+// a = -1, (-a, 2 - b) past b = 1, (-a, -2 - b) past b = -1. pbrt-v4's WrapEqualAreaSquare
+// (src/pbrt/util/math.cpp) in (a, b); RTXGI's probe borders (ProbeBorderUpdateCS) copy the same.
+inline void fold(double& a, double& b) {
+    for (int k = 0; k < 8 && (std::fabs(a) > 1.0 || std::fabs(b) > 1.0); ++k) {
+        if (a > 1.0) {
+            a = 2.0 - a;
+            b = -b;
+        } else if (a < -1.0) {
+            a = -2.0 - a;
+            b = -b;
+        }
+        if (b > 1.0) {
+            b = 2.0 - b;
+            a = -a;
+        } else if (b < -1.0) {
+            b = -2.0 - b;
+            a = -a;
+        }
+    }
+}
+// The octahedron point over (a, b) in [-1, 1]^2: (a, b, 1 - |a| - |b|) inside the diamond; in the
+// corner triangles (t_z < 0) the point unfolded, ((1 - |b|) sgn a, (1 - |a|) sgn b), sgn 0 = +1.
+inline Vec3 octahedron_point(double a, double b) {
+    double tz = 1.0 - std::fabs(a) - std::fabs(b);
+    if (tz >= 0.0) return {a, b, tz};
+    return {(1.0 - std::fabs(b)) * sign_not_zero(a), (1.0 - std::fabs(a)) * sign_not_zero(b), tz};
+}
+}  // namespace octa
+
+// Octahedral encoding: Cigolle, Donow, Evangelakos, Mara, McGuire, Meyer, "A Survey of
+// Efficient Representations for Independent Unit Vectors", JCGT 3(2), 2014 (float32x3_to_oct
+// and oct_to_float32x3); DDGI/RTXGI's DDGIGetOctahedralDirection/Coordinates are the same code.
+// In the frame t above: t = normalise(octahedron_point(a, b)); inverse
+// (a, b) = (t_x, t_y) / (|t_x| + |t_y| + |t_z|), folded like octahedron_point where t_z < 0.
+// Continued map: the fold.
+namespace octahedral {
+inline Vec3 face_to_dir(int, double a, double b) {
+    octa::fold(a, b);
+    Vec3 c = octa::octahedron_point(a, b);
+    Vec3 t = normalized(c.x, c.y, c.z);
+    return {t.x, t.z, -t.y};
+}
+inline FacePoint dir_to_face(double x, double y, double z) {
+    double tx = x, ty = -z, tz = y;
+    double l1 = std::fabs(tx) + std::fabs(ty) + std::fabs(tz);
+    double a = tx / l1, b = ty / l1;
+    if (tz < 0.0) {
+        double fa = (1.0 - std::fabs(b)) * octa::sign_not_zero(a);
+        b = (1.0 - std::fabs(a)) * octa::sign_not_zero(b);
+        a = fa;
+    }
+    return {0, a, b};
+}
+// A plane patch of the octahedron at distance |c|, seen at cos = 1/(sqrt3 |c|), over an (a, b)
+// area 1/sqrt3 of its own: 1 / |c|^3 sr per unit area (1 on the axes, 3 sqrt3 mid-octant).
+inline double density(int, double a, double b) {
+    octa::fold(a, b);
+    Vec3 c = octa::octahedron_point(a, b);
+    double r2 = c.x * c.x + c.y * c.y + c.z * c.z;
+    return 1.0 / (r2 * std::sqrt(r2));
+}
+}  // namespace octahedral
+
+// Equal-area octahedral square: Clarberg, "Fast Equal-Area Mapping of the (Hemi)Sphere using
+// SIMD", JGT 13(3), 2008, as pbrt-v4's EqualAreaSquareToSphere (src/pbrt/util/math.cpp) writes
+// it, in the frame t above. With s = 1 - (|a| + |b|) the signed L1 distance from the horizon
+// diamond, r = 1 - |s| (the L1 radius of the unfolded point), phi = ((|b| - |a|) / r + 1) pi/4:
+// t = (r sqrt(2 - r^2) cos phi sgn a, r sqrt(2 - r^2) sin phi sgn b, (1 - r^2) sgn s).
+// The cap above t_z holds r^2 of its hemisphere as the diamond of radius r holds r^2 of its
+// area, so every point has 4 pi / 4 = pi sr per unit (a, b) area. Continued map: the fold.
+namespace equal_area {
+inline Vec3 face_to_dir(int, double a, double b) {
+    octa::fold(a, b);
+    double aa = std::fabs(a), ab = std::fabs(b);
+    double s = 1.0 - (aa + ab);
+    double r = 1.0 - std::fabs(s);
+    double phi = (r == 0.0 ? 1.0 : (ab - aa) / r + 1.0) * (0.25 * kPi);
+    double sin_theta = r * std::sqrt(std::max(2.0 - r * r, 0.0));
+    double tx = std::copysign(std::cos(phi), a) * sin_theta;
+    double ty = std::copysign(std::sin(phi), b) * sin_theta;
+    double tz = std::copysign(1.0 - r * r, s);
+    return {tx, tz, -ty};
+}
+// Inverse: r = sqrt(1 - |t_z|), computed as |(t_x, t_y)| / sqrt(1 + |t_z|) to keep its digits
+// near the poles (pbrt's polynomial atan is replaced by atan2); b' = r 2phi/pi, a' = r - b',
+// folded to (1 - b', 1 - a') where t_z < 0, then signed by t_x and t_y.
+inline FacePoint dir_to_face(double x, double y, double z) {
+    double tx = x, ty = -z, tz = y;
+    double ax = std::fabs(tx), ay = std::fabs(ty);
+    double r = std::min(std::hypot(ax, ay) / std::sqrt(1.0 + std::fabs(tz)), 1.0);
+    double bb = r * std::atan2(ay, ax) * (2.0 / kPi);
+    double aa = r - bb;
+    if (tz < 0.0) {
+        double fa = 1.0 - bb;
+        bb = 1.0 - aa;
+        aa = fa;
+    }
+    return {0, std::copysign(aa, tx), std::copysign(bb, ty)};
+}
+inline double density(int, double, double) { return kPi; }
+}  // namespace equal_area
+
 // Dispatch on the family code.
 inline Vec3 face_to_dir(int family, int face, double a, double b) {
     switch (family) {
@@ -253,6 +378,8 @@ inline Vec3 face_to_dir(int family, int face, double a, double b) {
         case kSphere: return sphere::face_to_dir(face, a, b);
         case kAngular: return angular::face_to_dir(face, a, b);
         case kParaboloid: return paraboloid::face_to_dir(face, a, b);
+        case kOctahedral: return octahedral::face_to_dir(face, a, b);
+        case kEqualArea: return equal_area::face_to_dir(face, a, b);
         default: return tennisball::face_to_dir(face, a, b);
     }
 }
@@ -265,6 +392,8 @@ inline FacePoint dir_to_face(int family, double x, double y, double z) {
         case kSphere: return sphere::dir_to_face(x, y, z);
         case kAngular: return angular::dir_to_face(x, y, z);
         case kParaboloid: return paraboloid::dir_to_face(x, y, z);
+        case kOctahedral: return octahedral::dir_to_face(x, y, z);
+        case kEqualArea: return equal_area::dir_to_face(x, y, z);
         default: return tennisball::dir_to_face(x, y, z);
     }
 }
@@ -277,6 +406,8 @@ inline double density(int family, int face, double a, double b) {
         case kSphere: return sphere::density(face, a, b);
         case kAngular: return angular::density(face, a, b);
         case kParaboloid: return paraboloid::density(face, a, b);
+        case kOctahedral: return octahedral::density(face, a, b);
+        case kEqualArea: return equal_area::density(face, a, b);
         default: return tennisball::density(face, a, b);
     }
 }

@@ -16,6 +16,10 @@
 #include <limits>
 #include <vector>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "kernels.h"
 #include "parallel.h"
 #include "ripmap.h"
@@ -41,21 +45,26 @@ struct Job {
 // Per-band working memory.
 struct Scratch {
     std::vector<double> acc, tmp;
-    std::vector<double> rows;  // (kTile * kMaxRowSamples, 9)
+    // One row of sub-samples across a tile: fx, source point and weight of each.
+    std::vector<double> fxs;
+    std::vector<double> tile_acc, tile_wsum;  // (kTile, C) and kTile
     explicit Scratch(int64_t nch)
-        : acc(nch), tmp(3 * nch, 0.0), rows(size_t(kTile) * kMaxRowSamples * 9) {}
+        : acc(nch),
+          tmp(3 * nch, 0.0),
+          fxs(size_t(kTile) * kMaxRowSamples),
+          tile_acc(size_t(kTile) * nch),
+          tile_wsum(kTile) {}
 };
 
-// Write the normalised accumulator and the coverage of output pixel (i, j).
+// Write the normalised accumulator and the coverage of output pixel (i, j). NCH is the channel
+// count when known at compile time (3 or 4, the common cases), else 0.
+template <int NCH = 0>
 void store(const ResampleOutput& out, int64_t j, int64_t i, const double* acc, double wsum,
            double coverage) {
-    float* px = out.pixels + (j * out.width + i) * out.channels;
-    if (wsum > 0.0) {
-        double inv = 1.0 / wsum;
-        for (int64_t c = 0; c < out.channels; ++c) px[c] = float(acc[c] * inv);
-    } else {
-        for (int64_t c = 0; c < out.channels; ++c) px[c] = 0.0f;
-    }
+    const int64_t nch = NCH ? NCH : out.channels;
+    float* px = out.pixels + (j * out.width + i) * nch;
+    double inv = wsum > 0.0 ? 1.0 / wsum : 0.0;
+    for (int64_t c = 0; c < nch; ++c) px[c] = wsum > 0.0 ? float(acc[c] * inv) : 0.0f;
     if (out.alpha) out.alpha[j * out.width + i] = float(coverage);
     if (out.weights) out.weights[j * out.width + i] = wsum;
 }
@@ -172,97 +181,157 @@ void tile_counts(const Job& job, const TileGrid& grid, double inv_tw, double inv
     ny = auto_count(edge_y * inv_th);
 }
 
+// Where the taps of an interpolated tile read: level 0 (src) or a rip-map level, at
+// x_scale x + x_offset, with the fast (direct bilinear) path inside [bx0, bx1) x [by0, by1).
+struct TapWindow {
+    const Image* image;
+    double x_scale, x_offset;
+    int64_t level, level_start, level_width;
+    int64_t bx0, by0, bx1, by1;
+    int64_t last_safe;  // flat texel index below which a 4-float load stays in the array
+};
+
+// Add w x the bilinear read of a tap that is not on the fast path: a rip-map level's wrapped
+// read, or the seam-aware read of level 0.
+void slow_tap(const Job& job, const TapWindow& win, int64_t c00, double px, double py, double w,
+              double* acc, Scratch& scratch) {
+    if (win.level > 0) {
+        level_tap(job.rip.image, win.level_start, win.level_width, px * win.x_scale, py, w, acc);
+    } else {
+        accumulate_sample(job.src, job.cv.src, c00, px, py, job.filter, w, acc,
+                          scratch.tmp.data());
+    }
+}
+
+// Add one row of sub-samples (q: the row's quadratics in fx) across a tile to the pixels'
+// accumulators acc (pixels, C) and weight sums. Fast taps of 3 or 4 channels blend 4 floats at
+// once and sum a pixel's row in float (at most 64 samples: within 4e-6 relative) before it
+// joins the double accumulator; other taps go through slow_tap.
+template <int NCH>
+void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const double* q,
+                    const double* fxs, int64_t pixels, int nx, double* acc, double* wsum,
+                    Scratch& scratch) {
+    const int64_t nch = NCH ? NCH : job.out.channels;
+    const Image& image = *win.image;
+    const int64_t iw = image.width;
+    // The fast path takes cells whose top-left texel is in [bx0, bx1) x [by0, by1) (none
+    // without fast taps); unsigned differences test both ends at once.
+    const int64_t bx0 = win.bx0, by0 = win.by0;
+    const uint64_t span_x = job.fast_taps ? uint64_t(win.bx1 - win.bx0) : 0;
+    const uint64_t span_y = job.fast_taps ? uint64_t(win.by1 - win.by0) : 0;
+    const double x_scale = win.x_scale, x_offset = win.x_offset;
+    // A 4-float load at the last tap (texel flat + W + 1) must stay inside the array.
+    const int64_t last_safe = image.height * iw - iw - 1 - (nch == 3 ? 1 : 0);
+    const double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3], q4 = q[4], q5 = q[5];
+    const double q6 = q[6], q7 = q[7], q8 = q[8];
+    for (int64_t i = 0; i < pixels; ++i) {
+        double* a = acc + i * nch;
+        double ws = 0.0;
+#if defined(__SSE2__)
+        __m128 sum = _mm_setzero_ps();
+#endif
+        for (int64_t c = i * nx; c < (i + 1) * nx; ++c) {
+            double fx = fxs[c];
+            double px = q0 + fx * (q1 + fx * q2);
+            double py = q3 + fx * (q4 + fx * q5);
+            double w = q6 + fx * (q7 + fx * q8);
+            ws += w;
+            double tx = px * x_scale + x_offset - 0.5, ty = py - 0.5;
+            int64_t ix = floor_index(tx), iy = floor_index(ty);
+            if (!(uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y)) {
+                slow_tap(job, win, c00, px, py, w, a, scratch);
+                continue;
+            }
+            tx -= double(ix);
+            ty -= double(iy);
+            double k00 = w * (1.0 - tx) * (1.0 - ty), k10 = w * tx * (1.0 - ty);
+            double k01 = w * (1.0 - tx) * ty, k11 = w * tx * ty;
+            int64_t flat = iy * iw + ix;
+            const float* t0 = image.data + flat * nch;
+            const float* t1 = t0 + iw * nch;
+#if defined(__SSE2__)
+            if ((NCH == 3 || NCH == 4) && flat < last_safe) {
+                __m128 v = _mm_mul_ps(_mm_set1_ps(float(k00)), _mm_loadu_ps(t0));
+                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(k10)), _mm_loadu_ps(t0 + nch)));
+                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(k01)), _mm_loadu_ps(t1)));
+                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(k11)), _mm_loadu_ps(t1 + nch)));
+                sum = _mm_add_ps(sum, v);
+                continue;
+            }
+#endif
+            for (int64_t ch = 0; ch < nch; ++ch)
+                a[ch] += k00 * t0[ch] + k10 * t0[nch + ch] + k01 * t1[ch] + k11 * t1[nch + ch];
+        }
+#if defined(__SSE2__)
+        if (NCH == 3 || NCH == 4) {
+            float part[4];
+            _mm_storeu_ps(part, sum);
+            for (int64_t ch = 0; ch < nch; ++ch) a[ch] += double(part[ch]);
+        }
+#endif
+        wsum[i] += ws;
+    }
+}
+
 // Every pixel of an interpolated tile [i0, i1) x [j0, j1) whose grid maps into source cell c00.
-void tiled_block(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
-                 const TileGrid& grid, int64_t c00, Scratch& scratch) {
+template <int NCH>
+void tiled_block_n(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
+                   const TileGrid& grid, int64_t c00, Scratch& scratch) {
     const Geometry& s = job.cv.src;
-    const int64_t nch = job.out.channels;
-    int64_t bx0 = (c00 % s.columns) * s.cell_width();
-    int64_t by0 = (c00 / s.columns) * s.cell_height();
-    int64_t bx1 = bx0 + s.cell_width() - 1, by1 = by0 + s.cell_height() - 1;
+    const int64_t nch = NCH ? NCH : job.out.channels;
     double inv_tw = 1.0 / double(i1 - i0), inv_th = 1.0 / double(j1 - j0);
     int nx = job.samples, ny = job.samples, level = 0;
     if (job.adaptive) tile_counts(job, grid, inv_tw, inv_th, nx, ny, level);
-    // Taps read level 0 (src) or a rip-map level, at x_scale x + x_offset.
-    const Image* image = &job.src;
-    double x_scale = 1.0, x_offset = 0.0;
-    int64_t level_start = 0, level_width = job.s_width;
+    TapWindow win{&job.src, 1.0, 0.0, level, 0, job.s_width, 0, 0, 0, 0};
+    win.bx0 = (c00 % s.columns) * s.cell_width();
+    win.by0 = (c00 / s.columns) * s.cell_height();
+    win.bx1 = win.bx0 + s.cell_width() - 1;
+    win.by1 = win.by0 + s.cell_height() - 1;
     if (level > 0) {
-        image = &job.rip.image;
-        x_scale = 1.0 / double(1 << level);
-        level_start = rip_offset(job.s_width, level);
-        level_width = job.s_width >> level;
-        x_offset = double(level_start);
-        bx0 = level_start;
-        bx1 = level_start + level_width - 1;
+        win.image = &job.rip.image;
+        win.x_scale = 1.0 / double(1 << level);
+        win.level_start = rip_offset(job.s_width, level);
+        win.level_width = job.s_width >> level;
+        win.x_offset = double(win.level_start);
+        win.bx0 = win.level_start;
+        win.bx1 = win.level_start + win.level_width - 1;
     }
     double inv_nx = 1.0 / nx, inv_ny = 1.0 / ny;
-    const bool rgb = job.fast_taps && nch == 3;
+    const int64_t columns = (i1 - i0) * nx;
     // Each row of sub-samples (j, sy) has source x, source y and weight as quadratics in fx,
     // q0 + fx (c1 + fx c2): 9 numbers per row, shared by the tile's pixels along it.
-    double* rows = scratch.rows.data();
-    for (int64_t r = 0; r < (j1 - j0) * ny; ++r) {
-        double fy = (double(r / ny) + (double(r % ny) + 0.5) * inv_ny) * inv_th;
-        for (int k = 0; k < 3; ++k) {
-            double q0 = lagrange3(grid[0][0][k], grid[1][0][k], grid[2][0][k], fy);
-            double q1 = lagrange3(grid[0][1][k], grid[1][1][k], grid[2][1][k], fy);
-            double q2 = lagrange3(grid[0][2][k], grid[1][2][k], grid[2][2][k], fy);
-            rows[r * 9 + 3 * k] = q0;
-            rows[r * 9 + 3 * k + 1] = -3.0 * q0 + 4.0 * q1 - q2;
-            rows[r * 9 + 3 * k + 2] = 2.0 * q0 - 4.0 * q1 + 2.0 * q2;
-        }
-    }
-    double* acc = scratch.acc.data();
-    const int64_t iw = image->width;
+    double* fxs = scratch.fxs.data();
+    for (int64_t c = 0; c < columns; ++c)
+        fxs[c] = (double(c / nx) + (double(c % nx) + 0.5) * inv_nx) * inv_tw;
+    double* acc = scratch.tile_acc.data();  // (i1 - i0, C)
+    double* wsum = scratch.tile_wsum.data();
     for (int64_t j = j0; j < j1; ++j) {
-        for (int64_t i = i0; i < i1; ++i) {
-            std::fill(scratch.acc.begin(), scratch.acc.end(), 0.0);
-            // Three channels (the common case) accumulate in registers.
-            double acc_r = 0.0, acc_g = 0.0, acc_b = 0.0, wsum = 0.0;
-            for (int sy = 0; sy < ny; ++sy) {
-                const double* q = rows + ((j - j0) * ny + sy) * 9;
-                for (int sx = 0; sx < nx; ++sx) {
-                    double fx = (double(i - i0) + (sx + 0.5) * inv_nx) * inv_tw;
-                    double spx = q[0] + fx * (q[1] + fx * q[2]);
-                    double spy = q[3] + fx * (q[4] + fx * q[5]);
-                    double w = q[6] + fx * (q[7] + fx * q[8]);
-                    wsum += w;
-                    double tx = spx * x_scale + x_offset - 0.5, ty = spy - 0.5;
-                    double fx0 = std::floor(tx), fy0 = std::floor(ty);
-                    int64_t ix = int64_t(fx0), iy = int64_t(fy0);
-                    if (job.fast_taps && ix >= bx0 && iy >= by0 && ix < bx1 && iy < by1) {
-                        tx -= fx0;
-                        ty -= fy0;
-                        double k00 = w * (1.0 - tx) * (1.0 - ty), k10 = w * tx * (1.0 - ty);
-                        double k01 = w * (1.0 - tx) * ty, k11 = w * tx * ty;
-                        const float* t0 = image->data + (iy * iw + ix) * nch;
-                        const float* t1 = t0 + iw * nch;
-                        if (rgb) {
-                            acc_r += k00 * t0[0] + k10 * t0[3] + k01 * t1[0] + k11 * t1[3];
-                            acc_g += k00 * t0[1] + k10 * t0[4] + k01 * t1[1] + k11 * t1[4];
-                            acc_b += k00 * t0[2] + k10 * t0[5] + k01 * t1[2] + k11 * t1[5];
-                            continue;
-                        }
-                        for (int64_t c = 0; c < nch; ++c) {
-                            acc[c] += k00 * t0[c] + k10 * t0[nch + c] + k01 * t1[c] +
-                                      k11 * t1[nch + c];
-                        }
-                    } else if (level > 0) {
-                        level_tap(job.rip.image, level_start, level_width, spx * x_scale, spy, w,
-                                  acc);
-                    } else {
-                        accumulate_sample(job.src, s, c00, spx, spy, job.filter, w, acc,
-                                          scratch.tmp.data());
-                    }
-                }
+        std::fill(acc, acc + (i1 - i0) * nch, 0.0);
+        std::fill(wsum, wsum + (i1 - i0), 0.0);
+        for (int sy = 0; sy < ny; ++sy) {
+            double fy = (double(j - j0) + (sy + 0.5) * inv_ny) * inv_th;
+            double q[9];
+            for (int k = 0; k < 3; ++k) {
+                double q0 = lagrange3(grid[0][0][k], grid[1][0][k], grid[2][0][k], fy);
+                double q1 = lagrange3(grid[0][1][k], grid[1][1][k], grid[2][1][k], fy);
+                double q2 = lagrange3(grid[0][2][k], grid[1][2][k], grid[2][2][k], fy);
+                q[3 * k] = q0;
+                q[3 * k + 1] = -3.0 * q0 + 4.0 * q1 - q2;
+                q[3 * k + 2] = 2.0 * q0 - 4.0 * q1 + 2.0 * q2;
             }
-            if (rgb) {
-                acc[0] += acc_r;
-                acc[1] += acc_g;
-                acc[2] += acc_b;
-            }
-            store(job.out, j, i, acc, wsum, 1.0);
+            add_sample_row<NCH>(job, win, c00, q, fxs, i1 - i0, nx, acc, wsum, scratch);
         }
+        for (int64_t i = i0; i < i1; ++i)
+            store<NCH>(job.out, j, i, acc + (i - i0) * nch, wsum[i - i0], 1.0);
+    }
+}
+
+void tiled_block(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
+                 const TileGrid& grid, int64_t c00, Scratch& scratch) {
+    switch (job.out.channels) {
+        case 3: return tiled_block_n<3>(job, i0, j0, i1, j1, grid, c00, scratch);
+        case 4: return tiled_block_n<4>(job, i0, j0, i1, j1, grid, c00, scratch);
+        default: return tiled_block_n<0>(job, i0, j0, i1, j1, grid, c00, scratch);
     }
 }
 

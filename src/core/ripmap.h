@@ -37,7 +37,7 @@ inline void level_tap(const Image& rip, int64_t start, int64_t level_width, doub
                       double w, double* acc) {
     const int64_t height = rip.height, nch = rip.channels;
     double fx = x - 0.5, fy = y - 0.5;
-    int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
+    int64_t x0 = floor_index(fx), y0 = floor_index(fy);
     double tx = fx - double(x0), ty = fy - double(y0);
     for (int k = 0; k < 4; ++k) {
         int64_t ix = x0 + (k & 1), iy = y0 + (k >> 1);

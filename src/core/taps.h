@@ -52,8 +52,8 @@ inline void remap_tap(const Geometry& g, int64_t cell, int64_t ix, int64_t iy, i
     ImagePoint p = face_to_image(g, f.face, f.a, f.b);
     int64_t x0 = (p.cell % g.columns) * g.cell_width() + g.guard;
     int64_t y0 = (p.cell / g.columns) * g.cell_height() + g.guard;
-    jx = std::min(std::max(int64_t(std::floor(p.x)), x0), x0 + g.aspect * g.n - 1);
-    jy = std::min(std::max(int64_t(std::floor(p.y)), y0), y0 + g.n - 1);
+    jx = std::min(std::max(floor_index(p.x), x0), x0 + g.aspect * g.n - 1);
+    jy = std::min(std::max(floor_index(p.y), y0), y0 + g.n - 1);
 }
 
 inline void fetch(const Geometry& g, int64_t cell, int64_t ix, int64_t iy, bool fast,
@@ -95,13 +95,13 @@ inline void accumulate_sample(const Image& src, const Geometry& g, int64_t cell,
     const int64_t nch = src.channels;
     int64_t jx, jy;
     if (filter == kNearest) {
-        fetch(g, cell, int64_t(std::floor(px)), int64_t(std::floor(py)), false, jx, jy);
+        fetch(g, cell, floor_index(px), floor_index(py), false, jx, jy);
         const float* t = src.texel(jy, jx);
         for (int64_t c = 0; c < nch; ++c) acc[c] += w * double(t[c]);
         return;
     }
     double fx = px - 0.5, fy = py - 0.5;
-    int64_t x0 = int64_t(std::floor(fx)), y0 = int64_t(std::floor(fy));
+    int64_t x0 = floor_index(fx), y0 = floor_index(fy);
     double tx = fx - double(x0), ty = fy - double(y0);
     if (filter == kBilinear) {
         bool fast = block_inside(g, cell, x0, y0, x0 + 1, y0 + 1);
