@@ -13,6 +13,7 @@ Run by hand and quote the figures; nothing here is a test.
                                             # issue 14's table: this build, another build's
                                             # venv and py360convert + OpenCV, interleaved
                                             # (see benchmarks/targets.py, or targets --help)
+    python benchmarks/bench.py ibl          # GGX chain + irradiance, whole process, and per level
 
 The envconv measured is the one the running interpreter imports (run this with a venv's python
 in which envconv is installed); the first line printed names it. Kernel throughput counts output
@@ -213,6 +214,42 @@ def bench_mips(repeats: int = 7) -> None:
     print(f"mips latlong 2048x1024 -> cube-vcross 512, S={s}: level 0 {level0 * 1e3:.0f} ms, full chain (12 levels) {chain * 1e3:.0f} ms, ratio {chain / level0:.2f}")
 
 
+def bench_ibl(runs: int = 5) -> None:
+    """Image-based lighting: lat-long 2048x1024 -> GGX chain of a cube 256 (DDS) and a 32
+    irradiance cube (DDS), one process; then the prefilter's time per level, in process."""
+    exe = os.path.join(os.path.dirname(sys.executable), "envconv")
+    _compile_bytecode()
+    with tempfile.TemporaryDirectory() as tmp:
+        src_path = os.path.join(tmp, "latlong-2048.exr")
+        envconv.write(_latlong(1024), src_path, bit_depth="float")
+        cmd = [exe, "read", src_path, "resample", "--to", "cube-faces", "--size", "256", "--mips",
+               "ggx", "write", os.path.join(tmp, "spec.dds"), "resample", "--to", "cube-faces",
+               "--size", "32", "--irradiance", "write", os.path.join(tmp, "irr.dds")]  # fmt: skip
+        _run(cmd)
+        times = [_run(cmd)[0] for _ in range(runs)]
+        print(f"ibl {' '.join(cmd[1:])}: median {statistics.median(times):.3f} s, best "
+              f"{min(times):.3f} s over {runs} runs")  # fmt: skip
+    from envconv import ibl
+
+    source = _latlong(1024)
+    spent = []
+    original = ibl._prefilter
+
+    def timed(*args, **kwargs):
+        start = time.perf_counter()
+        result = original(*args, **kwargs)
+        spent.append((result.shape, args[7], time.perf_counter() - start))
+        return result
+
+    ibl._prefilter = timed
+    try:
+        envconv.convert(source, "cube-faces", size=256, mips="ggx")
+    finally:
+        ibl._prefilter = original
+    for shape, alpha, seconds in spent:
+        print(f"ibl level {shape[1]}x{shape[0]} alpha {alpha:.4f}: {seconds * 1e3:.0f} ms")
+
+
 def main(argv: list[str]) -> None:
     which = argv[1:] or ["kernel", "e2e", "batch", "mips"]
     if which[0] in ("-h", "--help"):
@@ -240,6 +277,8 @@ def main(argv: list[str]) -> None:
         bench_batch()
     if "mips" in which:
         bench_mips()
+    if "ibl" in which:
+        bench_ibl()
 
 
 if __name__ == "__main__":

@@ -87,7 +87,7 @@ def plan_convert(
     channels = list(channels)
     if resample.get("alpha") and not any(c.upper() == "A" or c.lower() == "alpha" for c in channels):
         channels.append("A")
-    max_channels = io.FORMATS[os.path.splitext(os.fspath(output_path))[1].lower()][3]
+    max_channels = io.WRITE_FORMATS[os.path.splitext(os.fspath(output_path))[1].lower()][3]
     channels = ["R", "G", "B"] if plan.format == "hdr" else channels[:max_channels]
     return {
         "files": list(output.files), "layout": output.layout, "size": output.size,

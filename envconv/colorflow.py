@@ -89,7 +89,7 @@ _CHROMATICITIES = {
     "ap0": (0.7347, 0.2653, 0.0, 1.0, 0.0001, -0.077, 0.32168, 0.33767),
 }
 # Formats whose OIIO writer drops ``oiio:ColorSpace`` (readers then apply the default rule).
-_NO_COLORSPACE_TAG = ("tiff", "jpeg")
+_NO_COLORSPACE_TAG = ("tiff", "jpeg", "dds", "ktx2")
 _PRIMARIES = re.compile(r"_(rec709|ap1|ap0)_scene$")
 
 
@@ -285,7 +285,7 @@ def plan_output(
     """
     from . import io
 
-    fmt = io.FORMATS.get(Path(os.fspath(path)).suffix.lower(), ("",))[0]
+    fmt = io.WRITE_FORMATS.get(Path(os.fspath(path)).suffix.lower(), ("",))[0]
     ptype = io.choose_pixel_type(os.fspath(path), pixel_type, bit_depth)
     config = _config(ocio_config)
     src = input_colorspace_of(metadata, pixel_type, None, ocio_config)

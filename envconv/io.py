@@ -39,9 +39,14 @@ from .file_io import (
     read_pixel_type,
 )
 from .layouts import get_layout
+from .textures import CONTAINER_FORMATS
 
 __all__ = ["read", "write", "read_image", "read_header", "read_pixel_type", "choose_pixel_type",
-           "output_paths", "mip_levels", "FORMATS"]
+           "output_paths", "mip_levels", "FORMATS", "WRITE_FORMATS"]
+
+#: Every format :func:`write` writes: those OIIO reads and writes, and the DDS and KTX2
+#: containers envconv writes itself (:mod:`envconv.textures`).
+WRITE_FORMATS = {**FORMATS, **CONTAINER_FORMATS}
 
 log = logging.getLogger(__name__)
 
@@ -174,6 +179,11 @@ def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=
     names the files of a ``cube-faces`` map by a face set (:mod:`envconv.facesets`).
     """
     path = os.fspath(path)
+    if Path(path).suffix.lower() in CONTAINER_FORMATS:
+        if "{level}" in path or "{face}" in path:
+            raise LayoutError(f"{path}: a DDS or KTX2 file holds every face and level; "
+                              "drop {face} and {level} from the path")  # fmt: skip
+        return [path]
     if "{level}" in path:
         return [
             p
@@ -210,12 +220,12 @@ def _face_names(layout, faces) -> tuple[str, ...]:
 
 def _format_of(path: str):
     ext = Path(path).suffix.lower()
-    if ext not in FORMATS:
-        known = " ".join(sorted(FORMATS))
+    if ext not in WRITE_FORMATS:
+        known = " ".join(sorted(WRITE_FORMATS))
         raise ImageIOError(
             f"cannot write {path}: unknown extension {ext or '(none)'} (known: {known})"
         )
-    return FORMATS[ext]
+    return WRITE_FORMATS[ext]
 
 
 def choose_pixel_type(path: str, pixel_type: str, bit_depth: str | None) -> str:
@@ -273,6 +283,8 @@ def write(
             warnings.append(message)
     levels, bit_depth, compression = encoded.levels, encoded.plan.pixel_type, encoded.plan.compression
     envmap = replace(envmap, metadata=encoded.metadata, levels=None)
+    if encoded.plan.format in ("dds", "ktx2"):
+        return [_write_container(envmap, os.fspath(path), encoded.plan.format, levels)]
     per_level = "{level}" in os.fspath(path)
     paths = output_paths(envmap.layout, path, len(levels) if per_level else 1, faces=faces)
     layout = envmap.layout
@@ -295,6 +307,31 @@ def write(
             if os.path.exists(temp):
                 os.remove(temp)
     return paths
+
+
+def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarray]) -> str:
+    """Write a DDS or KTX2 file (:mod:`envconv.textures`) through a temporary file."""
+    from . import __version__
+    from .textures import encode_texture, texture_images
+
+    output_paths(envmap.layout, path)
+    images, cube = texture_images(envmap.layout, envmap.guard, levels, envmap.alpha_index)
+    extra = {"envconv:layout": envmap.layout.name}
+    if "envconv:roughness" in envmap.metadata:
+        extra["envconv:roughness"] = str(envmap.metadata["envconv:roughness"])
+    data = encode_texture(fmt, images, cube, envmap.alpha_index is None,
+                          f"envconv {__version__}", extra)  # fmt: skip
+    temp = _temp_path(path)
+    try:
+        with open(temp, "wb") as handle:
+            handle.write(data)
+        os.replace(temp, path)
+    except OSError as exc:
+        raise ImageIOError(f"cannot write {path}: {exc.strerror or exc}") from None
+    finally:
+        if os.path.exists(temp):
+            os.remove(temp)
+    return path
 
 
 def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:

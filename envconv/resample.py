@@ -99,7 +99,9 @@ def convert(
     rotate=None,
     guard: int | str = 0,
     alpha: bool = False,
-    mips: bool | int | None = None,
+    mips: bool | int | str | None = None,
+    roughness="gltf",
+    irradiance: bool = False,
     in_convention=None,
     out_convention=None,
     up: str | None = None,
@@ -126,9 +128,17 @@ def convert(
         of its nearest cell.
     alpha : bool
         Add (or replace) an alpha channel holding each pixel's valid-region coverage.
-    mips : bool or int, optional
+    mips : bool, int or str, optional
         Also build a mip chain (``EnvMap.levels``): True (or 0) for the full round-down chain
-        down to 1 × 1, K for at most K levels. See :mod:`envconv.mips`.
+        down to 1 × 1, K for at most K levels. See :mod:`envconv.mips`. ``"ggx"`` (or
+        ``"ggx:K"``) prefilters levels 1 … with the GGX lobe of the split-sum approximation
+        instead of box-averaging them (:mod:`envconv.ibl`).
+    roughness : str or list of float
+        With ``mips="ggx"``: the roughness of each level, ``gltf`` (r = k/(L−1)), ``filament``,
+        ``unreal`` or the list r_1 … r_{L−1}. Recorded as ``envconv:roughness`` metadata.
+    irradiance : bool
+        Write E/π, the clamped-cosine convolution of the environment (every level of a
+        chain), instead of the environment itself.
     in_convention, out_convention : str or (3, 3) array, optional
         Convention of the tool that made the input / will read the output: a preset name
         (``blender``, ``cmft``, ``skylibs``, ``unity``, ``unreal``, ``ffmpeg``, …), an axis
@@ -152,6 +162,7 @@ def convert(
     (128, 96, 3)
     """
     to = get_layout(to)
+    mips, ggx = _mip_filter(mips)
     cin = resolve_convention(in_convention, envmap.layout)
     cout = resolve_convention(out_convention, to)
     if cout.remap is not None and mips:
@@ -224,6 +235,15 @@ def convert(
             envmap, to, size, guard_px, fill, n_samples, FILTERS[filter], rot, out, coverage,
             weights, count,
         )  # fmt: skip
+    metadata = dict(envmap.metadata)
+    if ggx or irradiance:
+        from . import ibl
+
+        if irradiance:
+            chain = ibl.irradiance_levels(envmap, to, size, guard_px, fill, rot, chain)
+        else:
+            chain, rough = ibl.ggx_levels(envmap, to, size, guard_px, fill, rot, chain, roughness)
+            metadata["envconv:roughness"] = " ".join(f"{r:.6g}" for r in rough)
     if alpha:
         if alpha_index is None:
             chain = [(np.concatenate([o, c[:, :, None]], axis=2), c) for o, c in chain]
@@ -234,7 +254,6 @@ def convert(
     out = chain[0][0]
     if cout.remap is not None:
         out = apply_remap(to, out, guard_px, cout.remap, inverse=True)
-    metadata = dict(envmap.metadata)
     return EnvMap(
         out,
         to,
@@ -244,6 +263,21 @@ def convert(
         pixel_type=envmap.pixel_type,
         levels=[o for o, _ in chain] if mips else None,
     )
+
+
+def _mip_filter(mips):
+    """(mips for the chain builder, True for GGX) of ``convert``'s ``mips``."""
+    if isinstance(mips, str):
+        name, _, count = mips.partition(":")
+        if name == "box":
+            return (int(count) if count else True), False
+        if name != "ggx":
+            raise UsageError(f"mips must be a number of levels, 'box' or 'ggx', got {mips!r}")
+        try:
+            return (int(count) if count else True), True
+        except ValueError:
+            raise UsageError(f"expected ggx:K with K a number of levels, got {mips!r}") from None
+    return mips, False
 
 
 def source_rips(

@@ -32,10 +32,10 @@ __all__ = ["cli", "main", "EnvconvCommand", "COMMANDS"]
 COMMANDS = {
     "batch": "batch", "colorspace": "chain", "convert": "convert", "exposure": "chain",
     "info": "info", "layouts": "layouts", "pattern": "pattern", "read": "chain",
-    "resample": "chain", "rotate": "chain", "run": "run", "write": "chain",
+    "resample": "chain", "rotate": "chain", "run": "run", "sh": "sh", "write": "chain",
 }  # fmt: skip
 #: Commands that run on their own and cannot be chained with others.
-STANDALONE = {"convert", "info", "layouts", "run", "pattern"}
+STANDALONE = {"convert", "info", "layouts", "run", "pattern", "sh"}
 
 
 def _load_commands(names=None) -> None:
@@ -202,7 +202,7 @@ def compose_steps(results, verbose: int, threads: int | None) -> None:
 
 
 #: Commands whose input file is decoded ahead, while the rest of envconv is imported.
-READS_INPUT = ("convert", "info", "read")
+READS_INPUT = ("convert", "info", "read", "sh")
 
 
 def _read_ahead_input(args: list[str]) -> None:

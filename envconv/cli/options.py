@@ -59,11 +59,17 @@ def parse_guard(ctx, param, value):
 
 
 def parse_mips(ctx, param, value):
-    """``--mips`` alone (or ``--mips all``): the full chain; ``--mips K``: K levels."""
+    """``--mips`` alone (or ``--mips all``): the full chain; ``--mips K``: K levels;
+    ``--mips ggx`` (``ggx:K``): the GGX-prefiltered chain (``box`` is the default filter)."""
     if value is None:
         return None
     if value == "all":
         return True
+    name, _, count = str(value).partition(":")
+    if name in ("ggx", "box"):
+        if count and not (count.isdigit() and int(count) >= 1):
+            raise click.BadParameter(f"expected {name}:K with K >= 1 levels, got {value!r}")
+        return value if name == "ggx" else (int(count) if count else True)
     try:
         number = int(value)
     except ValueError:
@@ -95,7 +101,9 @@ RESAMPLE = [
     ("out_convention", click.option("--out-convention", "out_convention", metavar="NAME|AXES", help="Convention of the tool that will read the output (same names as --in-convention; with --to cube-faces, a face set names and turns the six files).")),
     ("up", click.option("--up", type=click.Choice(["y", "z"], case_sensitive=False), help="Up axis of the input's world; z turns its +Z into +Y (same as --axes=x,z,-y).")),
     ("axes", click.option("--axes", metavar="AXES", help="Remap the input's axes by a signed permutation: --axes=-x,z,y makes envconv's (x, y, z) the input's (-x, z, y).")),
-    ("mips", click.option("--mips", is_flag=False, flag_value="all", default=None, callback=parse_mips, metavar="[K]", help="Write a mip chain: alone, every level down to 1x1; --mips K, K levels. EXR/TIFF: one MIP-mapped file; other formats: {level} in the path.")),
+    ("mips", click.option("--mips", is_flag=False, flag_value="all", default=None, callback=parse_mips, metavar="[K|ggx[:K]]", help="Write a mip chain: alone, every level down to 1x1; --mips K, K levels; --mips ggx, GGX-prefiltered levels for image-based lighting. EXR/TIFF/DDS/KTX2: one file; other formats: {level} in the path.")),
+    ("roughness", click.option("--roughness", default="gltf", show_default=True, metavar="gltf|filament|unreal|R1,R2,..", help="Roughness of each --mips ggx level: glTF-IBL-Sampler's k/(L-1), Filament's or Unreal's mapping, or a list for levels 1.. (see docs/ibl.md).")),
+    ("irradiance", click.option("--irradiance", is_flag=True, help="Write the cosine-convolved environment E/pi (diffuse image-based lighting) instead of the environment.")),
 ]  # fmt: skip
 
 WRITE = [

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "ibl.h"
 #include "kernels.h"
 #include "ripmap.h"
 #include "tiles.h"
@@ -241,6 +242,50 @@ void level_reads(Array<const float, nb::ndim<3>> rip, int64_t start, int64_t lev
     }
 }
 
+// Image-based lighting (src/core/ibl.h).
+void ibl_pyramid(Array<const float, nb::ndim<4>> faces, Array<float, nb::ndim<1>> out,
+                 int threads) {
+    int64_t p = faces.shape(1), nch = faces.shape(3);
+    if (faces.shape(0) != 6 || int64_t(faces.shape(2)) != p || p < 1 || (p & (p - 1)) ||
+        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * (8 + 4 * nch))
+        throw std::invalid_argument("faces must be (6, p, p, C) with p a power of two");
+    nb::gil_scoped_release release;
+    envconv::build_pyramid(faces.data(), p, nch, out.data(), threads);
+}
+
+void ibl_prefilter(Array<const float, nb::ndim<1>> pyramid, int64_t p, int64_t channels,
+                   GeoArray geo, TableArray cell_face, TableArray cell_turns,
+                   TableArray face_cell, double scale_x, double scale_y, double alpha,
+                   int samples, Array<const double, nb::shape<3, 3>> rot, bool fill, double tau,
+                   Array<float, nb::ndim<3>> out, int threads) {
+    envconv::Pyramid pyr{pyramid.data(), p, 0, channels};
+    for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
+    if (p < 1 || (p & (p - 1)) ||
+        int64_t(pyramid.shape(0)) != envconv::Pyramid::node_count(p) * (8 + 4 * channels) ||
+        int64_t(out.shape(2)) != channels || samples < 1 || !(alpha > 0.0) || !(tau > 0.0))
+        throw std::invalid_argument("bad prefilter arguments");
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    envconv::Rotation r;
+    for (int k = 0; k < 9; ++k) r.m[k] = rot.data()[k];
+    nb::gil_scoped_release release;
+    envconv::prefilter(pyr, g, scale_x, scale_y, alpha, samples, r, fill, tau, out.data(),
+                       out.shape(0), out.shape(1), threads);
+}
+
+void sh_project(Array<const float, nb::ndim<3>> image, GeoArray geo, TableArray cell_face,
+                TableArray cell_turns, TableArray face_cell, int samples, double sign_x,
+                Array<double, nb::ndim<2>> out, int threads) {
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    if (out.shape(0) != 9 || out.shape(1) != image.shape(2) || samples < 1)
+        throw std::invalid_argument("out must be (9, C)");
+    if (int64_t(image.shape(0)) != g.rows * g.cell_height() ||
+        int64_t(image.shape(1)) != g.columns * g.cell_width())
+        throw std::invalid_argument("image does not match its layout's size");
+    nb::gil_scoped_release release;
+    envconv::sh_project(image.data(), image.shape(0), image.shape(1), image.shape(2), g,
+                        samples, sign_x, out.data(), threads);
+}
+
 }  // namespace
 
 NB_MODULE(_core, m) {
@@ -267,6 +312,12 @@ NB_MODULE(_core, m) {
     m.def("filtered_reads", &filtered_reads, "src"_a, "geo"_a, "cell_face"_a, "cell_turns"_a,
           "face_cell"_a, "cells"_a, "points"_a, "filter"_a, "out"_a);
     m.def("level_reads", &level_reads, "rip"_a, "start"_a, "level_width"_a, "points"_a, "out"_a);
+    m.def("ibl_pyramid", &ibl_pyramid, "faces"_a, "out"_a, "threads"_a);
+    m.def("ibl_prefilter", &ibl_prefilter, "pyramid"_a, "p"_a, "channels"_a, "geo"_a,
+          "cell_face"_a, "cell_turns"_a, "face_cell"_a, "scale_x"_a, "scale_y"_a, "alpha"_a,
+          "samples"_a, "rot"_a, "fill"_a, "tau"_a, "out"_a, "threads"_a);
+    m.def("sh_project", &sh_project, "image"_a, "geo"_a, "cell_face"_a, "cell_turns"_a,
+          "face_cell"_a, "samples"_a, "sign_x"_a, "out"_a, "threads"_a);
     m.attr("TILE") = envconv::kTile;  // output rows per band: the progress counter's unit
     m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;
     m.attr("AUTO_MAX_SAMPLES") = envconv::kAutoMaxSamples;

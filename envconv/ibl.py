@@ -1,0 +1,220 @@
+"""Image-based lighting: GGX-prefiltered mip chains and the irradiance map.
+
+Split-sum prefilter (Karis, "Real Shading in Unreal Engine 4", SIGGRAPH 2013), with N = V = R:
+level 0 of a ``mips="ggx"`` chain is the mirror image; level k holds
+
+    L_k(n) = ∫ L(l) D(h) (n·l)⁺ dl / ∫ D(h) (n·l)⁺ dl,   h = normalize(n + l),
+    D(h) = α² / (π ((n·h)² (α² − 1) + 1)²),              α = r_k²,
+
+each texel the solid-angle mean of L_k over its footprint, as every envconv pixel is. The
+irradiance map (``irradiance=True``) is the same with α = 1, where D = 1/π: each texel holds
+E(n)/π = (1/π) ∫ L(l) (n·l)⁺ dl, the radiance a white Lambertian surface reflects (multiply by
+π for irradiance E).
+
+Roughness per level (``roughness=``)
+------------------------------------
+With L levels and k = 0 … L−1 (level 0 is always the mirror, r = 0):
+
+``gltf`` (default)
+    r = k / (L − 1): Khronos glTF-IBL-Sampler (``lib/source/lib.cpp``, the GGX filter's
+    ``roughness = lod / (mipLevelCount - 1)``).
+``filament``
+    r = 1 − √(1 − k/(L − 1)): Filament (``libs/iblprefilter/src/IBLPrefilterContext.cpp`` and
+    cmgen's ``CubemapIBL``), ``lodToPerceptualRoughness(lod)`` = (√(a² + 4b·lod) − a)/(2b)
+    with a = 2, b = −1, at lod = k/(L − 1); the inverse of lod = r (2 − r).
+``unreal``
+    r = min(1, 2^((1 − (L − 1 − k)) / 1.2)): Unreal Engine's ``ReflectionEnvironmentShared.ush``,
+    ``GetReflectionCaptureRoughnessFromMip`` with REFLECTION_CAPTURE_ROUGHEST_MIP = 1 and
+    REFLECTION_CAPTURE_ROUGHNESS_MIP_SCALE = 1.2 (the inverse of
+    ``ComputeReflectionCaptureMipFromRoughness``), clamped to 1.
+a list
+    r_1 … r_{L−1} explicitly (level 0 stays the mirror), each in [0, 1].
+
+In every mapping r is the perceptual roughness the engine's material uses, and α = r².
+
+Method
+------
+The native core (``src/core/ibl.h``) sums the lobe over a pyramid of the source's cube faces
+(Barnes–Hut): distant groups of texels enter through a second-order expansion of the lobe
+about their luminance-weighted mean direction, so a one-texel sun lands where it is and the
+result has no sampling noise and no fireflies; near texels are summed one by one. Each output
+pixel averages S × S point evaluations, S chosen so that they are at most α (and 1/8
+rad) apart. The pyramid is the chain's own level 0 when that is a power-of-two cube without guard
+ring; otherwise the source is resampled onto a power-of-two cube first.
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+
+import numpy as np
+
+from . import kernels
+from .envmap import EnvMap
+from .errors import UsageError
+from .geometry import horizon_pitch, kernel_geometry
+from .layouts import Layout, get_layout
+from .layouts.base import FAMILY_CUBE_GL
+
+__all__ = [
+    "ROUGHNESS_MAPPINGS",
+    "roughness_levels",
+    "parse_roughness",
+    "ggx_levels",
+    "irradiance_levels",
+]
+
+log = logging.getLogger(__name__)
+
+ROUGHNESS_MAPPINGS = ("gltf", "filament", "unreal")
+#: Expansion step bound (see src/core/ibl.h): looser for narrow lobes, where it is cheap to be
+#: accurate and most texels are.
+_TAU_NARROW, _TAU_BROAD, _NARROW_ALPHA = 1.0, 0.3, 0.1
+_MAX_SAMPLES = 8
+_MAX_PYRAMID = 2048
+#: Texels of the finest level near n's horizon are integrated by 3 x 3 sub-samples: at 32 they
+#: are small enough for that to be exact to ~1e-3 even for the broad lobes.
+_MIN_PYRAMID = 32
+#: The cosine lobe is broad: a 64 cube resolves it, and each node's luminance-weighted mean
+#: direction still places a small sun exactly.
+_IRRADIANCE_PYRAMID = 64
+
+
+def roughness_levels(mapping, count: int) -> list[float]:
+    """Perceptual roughness r_k of levels 0 … count−1 (r_0 = 0, the mirror); see the module doc.
+
+    Examples
+    --------
+    >>> roughness_levels("gltf", 5)
+    [0.0, 0.25, 0.5, 0.75, 1.0]
+    """
+    if count < 1:
+        raise UsageError("a chain has at least one level")
+    last = max(count - 1, 1)
+    if isinstance(mapping, str):
+        if mapping == "gltf":
+            return [k / last for k in range(count)]
+        if mapping == "filament":
+            return [1.0 - math.sqrt(max(0.0, 1.0 - k / last)) if k else 0.0 for k in range(count)]
+        if mapping == "unreal":
+            return [0.0] + [min(1.0, 2.0 ** ((1 - (count - 1 - k)) / 1.2)) for k in range(1, count)]
+        raise UsageError(f"unknown roughness mapping {mapping!r}; choose one of "
+                         f"{', '.join(ROUGHNESS_MAPPINGS)} or give a list")  # fmt: skip
+    values = [float(v) for v in mapping]
+    if len(values) != count - 1:
+        raise UsageError(f"the chain has {count - 1} levels after the mirror, but "
+                         f"{len(values)} roughness values were given")  # fmt: skip
+    if any(not 0.0 <= v <= 1.0 for v in values):
+        raise UsageError("roughness values must lie in [0, 1]")
+    return [0.0] + values
+
+
+def parse_roughness(value):
+    """A mapping name, or a list of floats from ``"0.1,0.2,…"`` (the CLI's --roughness)."""
+    if value is None:
+        return "gltf"
+    if not isinstance(value, str):
+        return [float(v) for v in value]
+    if value in ROUGHNESS_MAPPINGS:
+        return value
+    try:
+        return [float(v) for v in value.split(",") if v.strip()]
+    except ValueError:
+        raise UsageError(f"roughness must be one of {', '.join(ROUGHNESS_MAPPINGS)} or a "
+                         f"comma-separated list of numbers, got {value!r}") from None  # fmt: skip
+
+
+def _pow2(n: float) -> int:
+    return 1 << max(0, math.ceil(math.log2(max(n, 1.0))))
+
+
+def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None):
+    """(pyramid, p, channels, rotation) for the prefilter: the source's cube faces (6, p, p, C)
+    summed into the core's pyramid; ``rotation`` maps output directions to the pyramid's."""
+    nch = level0.shape[2]
+    n_cube = size * horizon_pitch("cube-faces") / horizon_pitch(to)
+    narrowest = min((a for a in alphas if a > 0), default=1.0)
+    p = _pow2(max(n_cube, min(2.0 / narrowest, 2.0 * n_cube)))
+    p = min(max(p, _MIN_PYRAMID), cap or _MAX_PYRAMID)
+    if to.family == FAMILY_CUBE_GL and guard == 0 and level0.shape[0] == to.rows * p:
+        from .textures import cube_faces
+
+        faces = np.stack(cube_faces(to, level0))
+        rotation = np.eye(3)
+    else:
+        mosaic = np.empty((p, 6 * p, nch), np.float32)
+        no_rips = np.zeros((1, 1, nch), np.float32)
+        kernels.resample_rows(
+            source.pixels, no_rips, 0, 0, kernel_geometry(source.layout, source.size, source.guard),
+            kernel_geometry("cube-faces", p, 0), 1.0, 1.0, 0, kernels.FILTER_BILINEAR,
+            np.ascontiguousarray(rot, np.float64), False, mosaic,
+        )  # fmt: skip
+        faces = mosaic.reshape(p, 6, p, nch).transpose(1, 0, 2, 3)
+        rotation = np.eye(3)
+    faces = np.ascontiguousarray(faces, np.float32)
+    count = sum(6 * (p >> k) ** 2 for k in range(p.bit_length()))
+    pyramid = np.empty(count * (8 + 4 * nch), np.float32)
+    kernels._core.ibl_pyramid(faces, pyramid, kernels.get_threads())
+    return pyramid, p, nch, rotation
+
+
+def _prefilter(pyr, to: Layout, size: int, guard: int, fill: bool, shape, scale, alpha, rotation):
+    p, nch = pyr[1], pyr[2]
+    height, width = shape
+    pitch = horizon_pitch(to) / size * max(scale)
+    spacing = min(max(alpha, 1e-3), 0.125)
+    samples = int(min(_MAX_SAMPLES, max(1, math.ceil(pitch / spacing))))
+    tau = _TAU_NARROW if alpha <= _NARROW_ALPHA else _TAU_BROAD
+    out = np.empty((height, width, nch), np.float32)
+    geo = kernels._geo(kernel_geometry(to, size, guard))
+    kernels._core.ibl_prefilter(
+        pyr[0], p, nch, *geo, float(scale[0]), float(scale[1]), float(alpha), samples,
+        np.ascontiguousarray(pyr[3], np.float64), bool(fill), tau, out, kernels.get_threads(),
+    )  # fmt: skip
+    log.debug("prefilter %dx%d alpha=%.4g S=%d tau=%.2g from a %d cube", width, height,
+              alpha, samples, tau, p)  # fmt: skip
+    return out
+
+
+def ggx_levels(source: EnvMap, to, size: int, guard: int, fill: bool, rot, chain, roughness):
+    """The chain with levels 1 … of ``chain`` (a list of (pixels, coverage), level 0 first, as
+    :func:`envconv.mips.build_chain` returns it) replaced by the GGX prefilter of ``source``,
+    and the roughness of every level. ``rot`` maps output directions to source directions."""
+    to = get_layout(to)
+    rough = roughness_levels(parse_roughness(roughness), len(chain))
+    alphas = [r * r for r in rough]
+    pyr = _pyramid(source, to, size, guard, rot, chain[0][0], alphas[1:])
+    out = [chain[0]]
+    w0, h0 = chain[0][0].shape[1], chain[0][0].shape[0]
+    for k in range(1, len(chain)):
+        pixels, coverage = chain[k]
+        scale = (w0 / pixels.shape[1], h0 / pixels.shape[0])
+        if alphas[k] <= 0.0:
+            out.append((pixels, coverage))
+            continue
+        level = _prefilter(pyr, to, size, guard, fill, pixels.shape[:2], scale, alphas[k], pyr[3])
+        out.append((level, coverage))
+    return out, rough
+
+
+def irradiance_levels(source: EnvMap, to, size: int, guard: int, fill: bool, rot, chain):
+    """Every level of ``chain`` replaced by E/π, the clamped-cosine convolution (α = 1)."""
+    to = get_layout(to)
+    pyr = _pyramid(
+        source,
+        to,
+        _IRRADIANCE_PYRAMID * horizon_pitch(to) / horizon_pitch("cube-faces"),
+        guard,
+        rot,
+        chain[0][0],
+        [1.0],
+        cap=_IRRADIANCE_PYRAMID,
+    )
+    w0, h0 = chain[0][0].shape[1], chain[0][0].shape[0]
+    out = []
+    for pixels, coverage in chain:
+        scale = (w0 / pixels.shape[1], h0 / pixels.shape[0])
+        out.append((_prefilter(pyr, to, size, guard, fill, pixels.shape[:2], scale, 1.0, pyr[3]),
+                    coverage))  # fmt: skip
+    return out
