@@ -96,7 +96,7 @@ _PRIMARIES = re.compile(r"_(rec709|ap1|ap0)_scene$")
 @lru_cache(maxsize=8)
 def _load(path: str | None, env: str | None) -> Any:
     if path is None and not (env or "").strip():
-        return color.builtin_config()  # loaded only if a question needs OCIO
+        return color.builtin_config()
     return color.load_config(path)
 
 

@@ -189,36 +189,6 @@ def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries
                 np.testing.assert_array_equal(saved[f"arr_{k}"], level, err_msg=name)
 
 
-def test_a_default_exr_conversion_never_loads_opencolorio(tmp_path):
-    """Linear Rec.709 in and out needs no colour conversion, and OCIO's built-in config answers
-    its questions from envconv's table: a fresh process converting an EXR to an EXR must not
-    import PyOpenColorIO, and must write the same file as with that config loaded."""
-    source = envconv.EnvMap(np.random.default_rng(5).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
-    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
-    code = (
-        "import sys\n"
-        "from envconv.api import convert_file\n"
-        f"convert_file({str(tmp_path / 'src.exr')!r}, sys.argv[1], resample={{'to': 'cube-vcross', 'size': 16}},\n"
-        "             write={'ocio_config': sys.argv[2] or None})\n"
-        "print('PyOpenColorIO' in sys.modules)\n"
-    )
-
-    def run(output, config):
-        done = subprocess.run([sys.executable, "-c", code, str(output), config], capture_output=True, text=True)
-        assert done.returncode == 0, done.stderr
-        return done.stdout.strip()
-
-    assert run(tmp_path / "lazy.exr", "") == "False"
-    assert run(tmp_path / "loaded.exr", "ocio://default") == "True"
-    lazy, loaded = envconv.read(tmp_path / "lazy.exr"), envconv.read(tmp_path / "loaded.exr")
-    np.testing.assert_array_equal(lazy.pixels, loaded.pixels)
-    drop = {"DateTime", "capDate"}  # the time of writing
-    assert {k: v for k, v in lazy.metadata.items() if k not in drop} == {
-        k: v for k, v in loaded.metadata.items() if k not in drop
-    }
-    assert lazy.metadata["oiio:ColorSpace"] == "lin_rec709_scene"
-
-
 def test_a_function_loaded_from_the_cache_still_links_into_a_new_compilation():
     """A cached library's linking bitcode is parsed only when something links it. A fresh
     process loads a helper from the cache, calls it, then compiles a new function that calls
