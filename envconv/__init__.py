@@ -6,8 +6,7 @@
 >>> envconv.write(cube, "sky_cross.exr")                 # doctest: +SKIP
 
 ``import envconv`` is cheap: ``EnvMap``, ``read``, ``write``, ``convert`` and the submodules
-load on first use, so that the command line can start decoding its input before numba and
-the layouts are imported (see :mod:`envconv.file_io`).
+load on first use, so that a command imports only what it uses.
 """
 
 from __future__ import annotations
@@ -19,10 +18,8 @@ from .errors import ColorError, EnvconvError, ImageIOError, LayoutError, UsageEr
 
 __version__ = "0.1.0"
 
-#: True in a process that envconv's command line runs (set by ``envconv.cli.main.main``): its
-#: start-up may skip what a library import inside someone else's program must not: importing
-#: numba at all while its cached kernels serve (``envconv._jit``), and PyYAML with numba
-#: (``envconv._jit._import_numba``).
+#: True in a process that envconv's command line runs (set by ``envconv.cli.main.main``). Read
+#: only by ``envconv._jit`` (running cached kernels without importing numba), and removed with it.
 _COMMAND_LINE_PROCESS = False
 
 __all__ = [

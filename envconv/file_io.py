@@ -1,9 +1,7 @@
 """One image file to and from float32 pixels and its header, through OpenImageIO and OpenEXR.
 
 This module knows files, not layouts: :mod:`envconv.io` builds environment maps on top of it.
-It imports neither numba nor the layouts, so a command can start decoding its input on a
-helper thread (:func:`read_ahead`) while the rest of envconv is still being imported: OIIO and
-OpenEXR release the GIL while they decode. Plain scanline EXRs are decoded by OpenEXR, and the
+Plain scanline EXRs are decoded by OpenEXR, and the
 commonest (RGB or RGBA, with attributes OIIO's reading of which is known) are read by it alone,
 so that OIIO is not imported (:mod:`envconv.exr_io`); everything else is read by OIIO.
 """
@@ -12,8 +10,6 @@ from __future__ import annotations
 
 import os
 import re
-import stat
-import threading
 from contextlib import contextmanager
 from typing import Any
 
@@ -25,7 +21,7 @@ from .exr_io import read_exr_pixels as _read_exr_pixels
 from .exr_io import read_plain_exr as _read_plain_exr
 from .exr_io import read_plain_exr_header as _read_plain_exr_header
 
-__all__ = ["read_image", "read_header", "read_pixel_type", "read_ahead", "join_read_ahead", "FORMATS"]
+__all__ = ["read_image", "read_header", "read_pixel_type", "FORMATS"]
 
 #: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
 FORMATS = {
@@ -48,17 +44,11 @@ def _oiio():
 def read_image(path: str | os.PathLike, level: int = 0):
     """Read one image file as float32 (H, W, C).
 
-    Takes the result of :func:`read_ahead` when that decoded this same, unchanged file.
-
     Returns
     -------
     pixels, channel names, metadata dict, pixel type (``half``/``float``/``uint8``/``uint16``)
     """
-    path = os.fspath(path)
-    ahead = _take_read_ahead(path, level)
-    if ahead is not None:
-        return ahead
-    return _decode(path, level)
+    return _decode(os.fspath(path), level)
 
 
 def _decode(path: str, level: int, threads: int | None = None):
@@ -160,75 +150,3 @@ def _tags_from_description(metadata: dict[str, Any]) -> dict[str, Any]:
     else:
         del metadata["ImageDescription"]
     return metadata
-
-
-# --- read-ahead ---------------------------------------------------------------------------------
-#
-# One slot: the command line reads ahead at most one input. The key holds the file's identity,
-# size and modification time, so a file replaced or rewritten in between is decoded again.
-
-_ahead_lock = threading.Lock()
-_ahead: dict[str, Any] = {}
-
-
-def _file_key(path: str, level: int):
-    try:
-        info = os.stat(path)
-    except OSError:
-        return None
-    if not stat.S_ISREG(info.st_mode):
-        return None
-    return (os.path.realpath(path), level, info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
-
-
-def read_ahead(path: str | os.PathLike, level: int = 0) -> bool:
-    """Start decoding ``path`` on a helper thread; False when it is not a regular file.
-
-    The next :func:`read_image` of the same unchanged file waits for that thread and takes its
-    pixels instead of decoding again. A failed read-ahead is forgotten and the file is decoded
-    again, so errors read as they always do. The helper is a daemon thread, so that a command
-    that fails early (a usage error) does not wait for a large decode it will never use: the
-    CLI ends with ``os._exit``, which stops it; before an ordinary interpreter exit, call
-    :func:`join_read_ahead`, so that the image libraries are not torn down under it. It decodes on
-    one core, leaving the other to the imports it overlaps (on two cores, 0.57 s against 0.59 s
-    with OpenEXR's pool and 0.60 s without a read-ahead, for the e2e benchmark's convert).
-    """
-    path = os.fspath(path)
-    key = _file_key(path, level)
-    if key is None:
-        return False
-    box: dict[str, Any] = {}
-
-    def decode() -> None:
-        try:
-            box["result"] = _decode(path, level, threads=1)
-        except BaseException:  # noqa: BLE001 -- read_image decodes again and reports it
-            pass
-
-    thread = threading.Thread(target=decode, name="envconv-read-ahead", daemon=True)
-    with _ahead_lock:
-        _ahead.clear()
-        _ahead.update(key=key, thread=thread, box=box)
-    thread.start()
-    return True
-
-
-def join_read_ahead() -> None:
-    """Wait for a read-ahead still decoding (its result stays in the slot)."""
-    with _ahead_lock:
-        thread = _ahead.get("thread")
-    if thread is not None:
-        thread.join()
-
-
-def _take_read_ahead(path: str, level: int):
-    """The read-ahead result for ``path`` if it is this file's, else None. Empties the slot."""
-    with _ahead_lock:
-        if not _ahead:
-            return None
-        key, thread, box = _ahead["key"], _ahead["thread"], _ahead["box"]
-        if key != _file_key(path, level):
-            return None
-        _ahead.clear()
-    thread.join()
-    return box.get("result")

@@ -1,4 +1,4 @@
-"""A one-shot command's start-up: the read-ahead, lazy imports and cached-kernel loading.
+"""A one-shot command's start-up and end: lazy imports, cached-kernel loading, exit status.
 
 These are the parts of ``envconv convert``'s wall time that come before and around the work
 (see benchmarks/bench.py e2e for the figures). Each test checks what a user relies on: the
@@ -10,7 +10,6 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import threading
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,6 @@ import pytest
 from conftest import write_plain
 
 import envconv
-import envconv.file_io as file_io
 
 ENVCONV = os.path.join(os.path.dirname(sys.executable), "envconv")
 
@@ -29,105 +27,6 @@ def _image(path, seed, shape=(16, 32, 3)):
     return pixels
 
 
-@pytest.fixture
-def decodes(monkeypatch):
-    """Every decode of a file, with the name of the thread that ran it."""
-    calls = []
-    original = file_io._decode
-
-    def counting(path, level, threads=None):
-        calls.append((os.path.basename(path), threading.current_thread().name))
-        return original(path, level, threads)
-
-    monkeypatch.setattr(file_io, "_decode", counting)
-    yield calls
-    file_io._ahead.clear()
-
-
-def test_read_ahead_decodes_once_on_its_thread_and_gives_the_same_pixels(tmp_path, decodes):
-    pixels = _image(tmp_path / "a.exr", 1)
-    assert file_io.read_ahead(tmp_path / "a.exr")
-    got, channels, _, pixel_type = file_io.read_image(tmp_path / "a.exr")
-    np.testing.assert_array_equal(got, pixels)
-    assert channels == ("R", "G", "B") and pixel_type == "float"
-    assert decodes == [("a.exr", "envconv-read-ahead")]
-    # The slot is emptied: the next read decodes again, on the caller's thread.
-    file_io.read_image(tmp_path / "a.exr")
-    assert decodes[1] == ("a.exr", threading.current_thread().name)
-
-
-def test_read_ahead_of_a_file_rewritten_since_is_not_used(tmp_path, decodes):
-    path = tmp_path / "a.exr"
-    _image(path, 1)
-    assert file_io.read_ahead(path)
-    file_io._ahead["thread"].join()
-    newer = _image(path, 2)  # same size on disk, new content and modification time
-    os.utime(path, ns=(os.stat(path).st_atime_ns, os.stat(path).st_mtime_ns + 10**9))
-    got = file_io.read_image(path)[0]
-    np.testing.assert_array_equal(got, newer)
-    assert len(decodes) == 2
-
-
-def test_read_ahead_of_another_file_is_not_used(tmp_path, decodes):
-    _image(tmp_path / "a.exr", 1)
-    b = _image(tmp_path / "b.exr", 2)
-    assert file_io.read_ahead(tmp_path / "a.exr")
-    np.testing.assert_array_equal(file_io.read_image(tmp_path / "b.exr")[0], b)
-    assert [name for name, _ in decodes] == ["a.exr", "b.exr"]
-
-
-def test_read_ahead_of_a_damaged_file_reports_as_a_plain_read_does(tmp_path, decodes):
-    path = tmp_path / "bad.exr"
-    _image(path, 1)
-    path.write_bytes(path.read_bytes()[:200])  # a truncated file
-    with pytest.raises(envconv.ImageIOError) as plain:
-        file_io.read_image(path)
-    assert file_io.read_ahead(path)
-    with pytest.raises(envconv.ImageIOError) as ahead:
-        file_io.read_image(path)
-    assert str(ahead.value) == str(plain.value)
-
-
-def test_read_ahead_skips_what_is_not_a_regular_file(tmp_path):
-    assert not file_io.read_ahead(tmp_path / "missing.exr")
-    assert not file_io.read_ahead(tmp_path)
-    assert not file_io._ahead
-
-
-def test_cli_reads_ahead_the_input_it_guesses(tmp_path, monkeypatch):
-    """The first argument after the command that names an existing image file; never with
-    --dry-run or --help, never for commands that take no single input."""
-    import envconv.cli  # noqa: F401
-
-    main_module = sys.modules["envconv.cli.main"]
-    started = []
-
-    def read_ahead(path):
-        regular = os.path.isfile(path)  # as file_io.read_ahead decides
-        if regular:
-            started.append(path)
-        return regular
-
-    monkeypatch.setattr(file_io, "read_ahead", read_ahead)
-    _image(tmp_path / "in.exr", 1)
-    (tmp_path / "latlong").write_text("not an image")
-    inp, out = str(tmp_path / "in.exr"), str(tmp_path / "out.exr")
-    monkeypatch.chdir(tmp_path)
-    for args, expected in [
-        (["convert", inp, out, "--to", "latlong"], [inp]),
-        (["convert", "--to", "latlong", inp, out], [inp]),
-        (["info", inp, "--json"], [inp]),
-        (["read", inp, "resample", "--to", "sphere", "write", out], [inp]),
-        (["convert", inp, out, "--to", "latlong", "--dry-run"], []),
-        (["convert", "--help"], []),
-        (["batch", str(tmp_path), "resample", "--to", "latlong"], []),
-        (["convert", "missing.exr", out, "--to", "latlong"], []),
-    ]:
-        started.clear()
-        main_module._read_ahead_input(args)
-        assert started == expected, args
-
-
 def _run_python(code: str) -> str:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
@@ -135,8 +34,8 @@ def _run_python(code: str) -> str:
 
 
 def test_importing_the_command_line_loads_neither_numba_nor_the_layouts():
-    """The entry point stays light until a command needs the kernels, so that the read-ahead
-    starts before numba is imported."""
+    """The entry point stays light until a command needs the kernels (``layouts --help`` or a
+    usage error should not wait for them)."""
     out = _run_python(
         "import sys, envconv, envconv.cli, envconv.file_io\n"
         "print(sorted(m for m in ('numba', 'envconv.layouts', 'envconv.resample') if m in sys.modules))"
@@ -267,23 +166,20 @@ def test_numbas_runtime_functions_load_from_envconvs_cache_and_a_bad_file_is_rep
     assert not [f for f in os.listdir(cache_dir) if f.endswith(".tmp")]
 
 
-@pytest.mark.parametrize("full_exit", ["", "1"])
-def test_the_console_script_ends_alike_with_or_without_interpreter_teardown(tmp_path, full_exit):
-    """envconv ends with os._exit after the interpreter's own shutdown steps (threads, atexit
-    handlers, flushed streams); ENVCONV_FULL_EXIT=1 exits the ordinary way. Both must give the
-    same status, output and files."""
-    env = {**os.environ, "ENVCONV_FULL_EXIT": full_exit}
+def test_the_console_script_ends_with_the_status_and_output_of_the_command(tmp_path):
+    """The console script ends as any Python program does: status 0 with the paths written on
+    stdout, 1 and one line on stderr for bad input, 2 for bad usage, atexit handlers run."""
     source = tmp_path / "in.exr"
     _image(source, 3)
     ok = subprocess.run([ENVCONV, "convert", str(source), str(tmp_path / "out.exr"), "--to",
                          "cube-vcross", "--size", "8", "--from", "latlong"],
-                        capture_output=True, text=True, env=env)  # fmt: skip
+                        capture_output=True, text=True)  # fmt: skip
     assert ok.returncode == 0, ok.stderr
     assert ok.stdout.strip() == str(tmp_path / "out.exr") and (tmp_path / "out.exr").is_file()
     bad = subprocess.run([ENVCONV, "convert", str(tmp_path / "missing.exr"), str(tmp_path / "o.exr"),
-                          "--to", "latlong"], capture_output=True, text=True, env=env)  # fmt: skip
+                          "--to", "latlong"], capture_output=True, text=True)  # fmt: skip
     assert bad.returncode == 1 and len(bad.stderr.strip().splitlines()) == 1
-    usage = subprocess.run([ENVCONV, "convert", str(source)], capture_output=True, text=True, env=env)
+    usage = subprocess.run([ENVCONV, "convert", str(source)], capture_output=True, text=True)
     assert usage.returncode == 2
     code = (
         "import atexit, sys\n"
@@ -292,56 +188,10 @@ def test_the_console_script_ends_alike_with_or_without_interpreter_teardown(tmp_
         "from envconv.cli import main\n"
         "main()\n"
     )
-    handlers = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    handlers = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert handlers.returncode == 0
     assert handlers.stdout.splitlines()[0].startswith("latlong")
     assert handlers.stdout.splitlines()[-1] == "atexit ran"
-
-
-_NUMBA_YAML_PROBE = (
-    "import sys, envconv\n"
-    "envconv._COMMAND_LINE_PROCESS = sys.argv[1] == 'cli'\n"
-    "import envconv._jit\n"
-    "numba = envconv._jit.import_numba()\n"
-    "print('yaml' in sys.modules, numba.config.NUMBA_NUM_THREADS)\n"
-)
-
-
-def test_the_command_line_imports_numba_without_pyyaml_and_numba_still_reads_its_config(tmp_path):
-    """PyYAML serves only numba's ``.numba_config.yaml``. A command-line process imports numba
-    without it when the working directory has none; a library import is left alone. Either
-    way numba still reads such a file: at import when it is there, and at its next config
-    reload (as before every compilation) when it appears later."""
-    pytest.importorskip("yaml")
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}  # the file's turn
-
-    def probe(mode, cwd):
-        done = subprocess.run([sys.executable, "-c", _NUMBA_YAML_PROBE, mode], cwd=cwd, env=env,
-                              capture_output=True, text=True)  # fmt: skip
-        assert done.returncode == 0, done.stderr
-        return done.stdout.split()
-
-    loaded, threads = probe("library", tmp_path)
-    assert loaded == "True"
-    assert probe("cli", tmp_path) == ["False", threads]
-    if threads == "1":
-        pytest.skip("one core: a config file asking for one thread would change nothing")
-    (tmp_path / ".numba_config.yaml").write_text("num_threads: 1\n")
-    assert probe("cli", tmp_path) == ["True", "1"]
-
-    later = tmp_path / "later"
-    later.mkdir()
-    code = (
-        _NUMBA_YAML_PROBE
-        + "import pathlib\n"
-        + "pathlib.Path('.numba_config.yaml').write_text('num_threads: 1')\n"
-        + "numba.core.config.reload_config()\n"
-        + "print(numba.config.NUMBA_NUM_THREADS)\n"
-    )
-    done = subprocess.run([sys.executable, "-c", code, "cli"], cwd=later, env=env,
-                          capture_output=True, text=True)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.split() == ["False", threads, "1"]
 
 
 def test_exr_commands_never_load_openimageio(tmp_path):
