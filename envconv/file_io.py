@@ -1,9 +1,8 @@
 """One image file to and from float32 pixels and its header, through OpenImageIO and OpenEXR.
 
 This module knows files, not layouts: :mod:`envconv.io` builds environment maps on top of it.
-Plain scanline EXRs are decoded by OpenEXR, and the
-commonest (RGB or RGBA, with attributes OIIO's reading of which is known) are read by it alone,
-so that OIIO is not imported (:mod:`envconv.exr_io`); everything else is read by OIIO.
+OpenImageIO opens every file and reads every header; the pixels of plain scanline EXRs are
+decoded by the OpenEXR library, which is faster at it (:mod:`envconv.exr_io`).
 """
 
 from __future__ import annotations
@@ -18,8 +17,6 @@ import numpy as np
 from .errors import ImageIOError
 from .exr_io import is_plain_exr as _plain_exr
 from .exr_io import read_exr_pixels as _read_exr_pixels
-from .exr_io import read_plain_exr as _read_plain_exr
-from .exr_io import read_plain_exr_header as _read_plain_exr_header
 
 __all__ = ["read_image", "read_header", "read_pixel_type", "FORMATS"]
 
@@ -51,15 +48,11 @@ def read_image(path: str | os.PathLike, level: int = 0):
     return _decode(os.fspath(path), level)
 
 
-def _decode(path: str, level: int, threads: int | None = None):
+def _decode(path: str, level: int):
     if not os.path.exists(path):
         raise ImageIOError(f"input file not found: {path}")
     if os.path.isdir(path):
         raise ImageIOError(f"input is a directory, not an image: {path}")
-    if level == 0 and path.lower().endswith(".exr"):
-        plain = _read_plain_exr(path, threads)  # OIIO's reading, without loading OIIO
-        if plain is not None:
-            return plain
     oiio = _oiio()
     # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
     # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.
@@ -74,7 +67,7 @@ def _decode(path: str, level: int, threads: int | None = None):
         spec = inp.spec()
         pixels = None
         if level == 0 and _plain_exr(inp, spec):
-            pixels = _read_exr_pixels(path, spec, threads)
+            pixels = _read_exr_pixels(path, spec)
         if pixels is None:
             pixels = inp.read_image(0, level, 0, spec.nchannels, oiio.FLOAT)
         if pixels is None or inp.has_error:
@@ -110,12 +103,7 @@ def read_header(path: str | os.PathLike, level: int = 0):
     -------
     width, height, channel names, metadata dict (of MIP level ``level``)
     """
-    path = os.fspath(path)
-    if level == 0 and path.lower().endswith(".exr") and os.path.isfile(path):
-        plain = _read_plain_exr_header(path)  # OIIO's reading, without loading OIIO
-        if plain is not None:
-            return plain
-    with _open_input(path) as inp:
+    with _open_input(os.fspath(path)) as inp:
         if level and not inp.seek_subimage(0, level):
             raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
         spec = inp.spec()

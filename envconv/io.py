@@ -24,9 +24,6 @@ import numpy as np
 from .detect import detect_layout
 from .envmap import EnvMap
 from .errors import ImageIOError, LayoutError
-from .exr_io import prefer_openexr_writer as _prefer_openexr_writer
-from .exr_io import read_plain_exr_header as _read_plain_exr_header
-from .exr_io import write_plain_exr as _write_plain_exr
 from .file_io import (
     FORMATS,
     _first_line,
@@ -139,10 +136,6 @@ def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
     if "{face}" in path:
         first = _part_path(path, "px")
         path = first if os.path.exists(first) else _part_path(path, "front")
-    if path.lower().endswith(".exr") and os.path.isfile(path):
-        plain = _read_plain_exr_header(path)  # a plain file has no MIP levels
-        if plain is not None:
-            return [plain[:2]]
     with _open_input(path) as inp:
         sizes = []
         while inp.seek_subimage(0, len(sizes)):
@@ -311,9 +304,6 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
             )
     levels = [_level_image(target, pixels, envmap, face, bit_depth, compression, level)
               for pixels in images]  # fmt: skip
-    if fmt == "openexr" and len(levels) == 1:
-        if _prefer_openexr_writer(levels[0].attributes) and _write_plain_exr(temp, levels[0]):
-            return
     oiio = _oiio()
     out = oiio.ImageOutput.create(temp)
     if out is None:

@@ -194,69 +194,9 @@ def test_the_console_script_ends_with_the_status_and_output_of_the_command(tmp_p
     assert handlers.stdout.splitlines()[-1] == "atexit ran"
 
 
-def test_exr_commands_never_load_openimageio(tmp_path):
-    """A plain RGB EXR in and out is read and written by the OpenEXR library alone, so neither
-    ``convert`` nor ``info`` imports OpenImageIO (0.035 s); the file written holds what
-    converting in this process gives, and ``info`` reports what it reports here."""
-    from envconv.exr_io import _oiio_reading_known
-
-    if not _oiio_reading_known():
-        pytest.skip("this OIIO version's reading is not known to envconv: OIIO reads every file")
-    source = envconv.EnvMap(np.random.default_rng(9).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
-    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
-    code = (
-        "import atexit, sys\n"
-        "from envconv.cli.main import main\n"
-        "atexit.register(lambda: print('OpenImageIO' in sys.modules))\n"
-        "sys.argv = ['envconv', *sys.argv[1:]]\n"
-        "main()\n"
-    )
-    done = subprocess.run([sys.executable, "-c", code, "convert", str(tmp_path / "src.exr"),
-                           str(tmp_path / "out.exr"), "--to", "cube-vcross", "--size", "8"],
-                          capture_output=True, text=True)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.split()[-1] == "False"
-    expected = envconv.convert(envconv.read(tmp_path / "src.exr"), to="cube-vcross", size=8)
-    written = envconv.read(tmp_path / "out.exr")
-    np.testing.assert_array_equal(written.pixels, expected.pixels)
-    assert written.layout.name == "cube-vcross"
-
-    done = subprocess.run([sys.executable, "-c", code, "info", str(tmp_path / "out.exr"), "--json"],
-                          capture_output=True, text=True)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    *report, loaded = done.stdout.splitlines()
-    assert loaded == "False"
-    import json
-
-    assert json.loads("\n".join(report)) == envconv.info.describe(str(tmp_path / "out.exr"))
-
-
-@pytest.mark.parametrize("variable", [None, "OPENIMAGEIO_THREADS"])
-def test_openexr_threads_follow_oiio_without_loading_it_unless_configured(variable):
-    """Without OIIO loaded and no OIIO variable set, OIIO would use every core: OpenEXR gets
-    as many threads without importing OIIO. A variable that sets OIIO's threads is obeyed."""
-    code = (
-        "import os, sys, OpenEXR\n"
-        "from envconv.exr_io import _set_openexr_threads\n"
-        "_set_openexr_threads('zip')\n"
-        "print(OpenEXR.global_thread_count(), 'OpenImageIO' in sys.modules)\n"
-    )
-    env = {k: v for k, v in os.environ.items() if not k.startswith("OPENIMAGEIO_")}
-    if variable:
-        env[variable] = "1"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
-    assert done.returncode == 0, done.stderr
-    threads, loaded = done.stdout.split()
-    if variable:
-        assert (threads, loaded) == ("0", "True")  # one thread: OpenEXR's caller does the work
-    else:
-        cores = os.cpu_count() or 1
-        assert (int(threads), loaded) == (cores if cores > 1 else 0, "False")
-
-
 def test_installed_versions_are_what_importlib_metadata_says():
-    """envconv reads numba's, OIIO's and OCIO's versions from their dist-info directories,
-    without importing importlib.metadata (0.02 s of a one-shot command)."""
+    """envconv._cached_kernels reads numba's version from its dist-info directory, without
+    importing importlib.metadata (0.02 s of a one-shot command)."""
     from importlib import metadata
 
     from envconv._versions import installed_version
