@@ -283,10 +283,10 @@ def plan_output(
     ``pixel_type`` and ``metadata`` are the map's (its ``oiio:ColorSpace`` says what colour
     space its pixels are in; float data without one is taken as linear Rec.709).
     """
-    from . import io
+    from .formats import FORMATS, choose_pixel_type
 
-    fmt = io.FORMATS.get(Path(os.fspath(path)).suffix.lower(), ("",))[0]
-    ptype = io.choose_pixel_type(os.fspath(path), pixel_type, bit_depth)
+    fmt = FORMATS.get(Path(os.fspath(path)).suffix.lower(), ("",))[0]
+    ptype = choose_pixel_type(os.fspath(path), pixel_type, bit_depth)
     config = _config(ocio_config)
     src = input_colorspace_of(metadata, pixel_type, None, ocio_config)
     if output_colorspace:

@@ -17,20 +17,9 @@ import numpy as np
 from .errors import ImageIOError
 from .exr_io import is_plain_exr as _plain_exr
 from .exr_io import read_exr_pixels as _read_exr_pixels
+from .formats import FORMATS
 
 __all__ = ["read_image", "read_header", "read_pixel_type", "FORMATS"]
-
-#: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
-FORMATS = {
-    ".exr": ("openexr", ("half", "float"), None, None),
-    ".hdr": ("hdr", ("float",), "float", 3),
-    ".tif": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
-    ".tiff": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
-    ".png": ("png", ("uint8", "uint16"), "uint8", 4),
-    ".jpg": ("jpeg", ("uint8",), "uint8", 3),
-    ".jpeg": ("jpeg", ("uint8",), "uint8", 3),
-}
-
 
 def _oiio():
     import OpenImageIO

@@ -306,7 +306,7 @@ def test_unknown_extension_raises(tmp_path):
 
 def _fail_on_face(monkeypatch, face_to_fail):
     """Make envconv.io fail while writing one file, after the real writer produced it."""
-    import envconv.io as io_module
+    import envconv.io_write as io_module
 
     real = io_module._write_one
 
