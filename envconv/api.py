@@ -7,7 +7,8 @@ import os
 from typing import Any
 
 from . import io
-from .resample import convert, preload_kernels
+from .resample import preload_kernels
+from .sourcemap import convert_source
 
 __all__ = ["convert_file", "plan_convert"]
 
@@ -48,7 +49,7 @@ def convert_file(
             log.warning("%s", note)
     else:
         warnings.extend(notes)
-    result = convert(source, to, **resample)
+    result = convert_source(source, to, **resample)
     return io.write(result, output_path, **write, warnings=warnings)
 
 
@@ -73,8 +74,8 @@ def plan_convert(
     resample = dict(resample or {})
     output = Pipeline([Read(input_path, **read), Resample(**resample), Write(output_path)]).plan()[0]
     first = _first_file(os.fspath(input_path), read.get("layout"))
-    _, _, channels, metadata = io.read_header(first, int(read.get("level", 0) or 0))
-    pixel_type = io.read_pixel_type(first)
+    _, _, channels, metadata = io.read_header(first, int(read.get("level", 0) or 0), read.get("part"))
+    pixel_type = io.read_pixel_type(first, read.get("part"))
     config = write.get("ocio_config") or read.get("ocio_config")
     source = input_colorspace_of(metadata, pixel_type, read.get("input_colorspace"), config)
     working = input_colorspace_of({}, "float", WORKING_COLORSPACE, config)

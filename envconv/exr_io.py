@@ -54,24 +54,21 @@ def _set_openexr_threads(compression: str) -> None:
 
 
 def is_plain_exr(inp, spec) -> bool:
-    """True for a single-part scanline OpenEXR file of half or float channels whose data
-    window is its display window (``inp`` an open OIIO ImageInput, ``spec`` its ImageSpec):
-    what :func:`read_exr_pixels` decodes."""
+    """True for a single-part scanline OpenEXR file of half or float channels (``inp`` an
+    open OIIO ImageInput, ``spec`` its ImageSpec): what :func:`read_exr_pixels` decodes."""
     return (
         inp.format_name() == "openexr"
         and spec.tile_width == 0
         and not spec.deep
         and spec.get_int_attribute("oiio:subimages", 1) == 1
-        and (spec.x, spec.y, spec.width, spec.height)
-        == (spec.full_x, spec.full_y, spec.full_width, spec.full_height)
         and str(spec.format) in ("half", "float")
         and all(str(f) in ("half", "float") for f in spec.channelformats)
     )
 
 
 def read_exr_pixels(path: str, spec):
-    """Pixels (H, W, C) float32 of a plain scanline EXR (:func:`is_plain_exr`), in ``spec``'s
-    channel order, decoded by the OpenEXR library. None when it declines or fails (subsampled
+    """Pixels (H, W, C) float32 of a plain scanline EXR's data window (:func:`is_plain_exr`),
+    in ``spec``'s channel order, decoded by the OpenEXR library. None when it declines or fails (subsampled
     channels, a damaged file): then OIIO reads the file, or says why it cannot."""
     import OpenEXR
 

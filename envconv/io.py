@@ -20,10 +20,17 @@ from typing import Any
 
 import numpy as np
 
-from .detect import detect_layout
+from .detect import place_image
 from .envmap import EnvMap
 from .errors import ImageIOError, LayoutError
-from .file_io import _open_input, read_header, read_image, read_pixel_type
+from .file_io import (
+    FileHeader,
+    _open_input,
+    read_file,
+    read_file_header,
+    read_image,
+    read_pixel_type,
+)
 from .formats import FORMATS, choose_pixel_type
 from .io_write import output_paths, write
 from .layouts import get_layout
@@ -37,7 +44,8 @@ log = logging.getLogger(__name__)
 _DROP_PREFIXES = ("oiio:", "envconv:", "openexr:", "tiff:", "png:", "jpeg:", "exif:", "hdr:")
 _DROP_NAMES = {"envmap", "compression", "planarconfig", "Orientation", "XResolution",
                "YResolution", "ResolutionUnit", "PixelAspectRatio", "screenWindowCenter",
-               "screenWindowWidth", "tile_width", "tile_height", "Software", "textureformat"}  # fmt: skip
+               "screenWindowWidth", "tile_width", "tile_height", "Software", "textureformat",
+               "name"}  # fmt: skip
 _KEEP_NAMES = {"oiio:ColorSpace"}
 
 
@@ -47,6 +55,7 @@ def read(
     level: int = 0,
     input_colorspace: str | None = None,
     ocio_config: str | os.PathLike | None = None,
+    part: str | None = None,
 ) -> EnvMap:
     """Read an environment map, in scene-linear float32 (linear Rec.709).
 
@@ -63,65 +72,98 @@ def read(
         ``oiio:ColorSpace``, else linear for float/half and sRGB for 8/16-bit data.
     ocio_config : str or path, optional
         OpenColorIO config; default ``$OCIO``, else ``ocio://default``.
+    part : str, optional
+        Part of a multi-part file to read alone (its name, or its index); default every part
+        that is an image of the first part's windows (see :mod:`envconv.file_io`).
 
-    Pixels are converted to linear Rec.709 by :func:`envconv.colorflow.to_working`. A
-    lat-long stored with edge-aligned samples (``oiio:sampleborder``, as OpenEXR envmaps
-    written by other tools) is resampled onto pixel centres
-    (:func:`envconv.colorflow.resample_edge_aligned`).
+    The map is the file's display window (:mod:`envconv.file_io`). Where the data window
+    leaves holes, every channel is 0 there, an alpha channel ``A`` (1 elsewhere) is added
+    when the file has none, and ``EnvMap.valid`` marks them. Pixels are converted to linear
+    Rec.709 by :func:`envconv.colorflow.to_working`. A lat-long stored with edge-aligned
+    samples (``oiio:sampleborder``, as OpenEXR envmaps written by other tools) is resampled
+    onto pixel centres (:func:`envconv.colorflow.resample_edge_aligned`).
     """
     from .colorflow import to_working
 
     path = os.fspath(path)
     if "{face}" in path:
-        return to_working(_read_multi(path, layout, level), input_colorspace, ocio_config)
+        return to_working(_read_multi(path, layout, level, part), input_colorspace, ocio_config)
     if layout is not None and get_layout(layout).multi_file:
         raise LayoutError(f"layout {layout} is stored as several files; put {{face}} in the path")
-    pixels, channels, metadata, pixel_type = read_image(path, level)
-    height, width = pixels.shape[:2]
-    guard = int(metadata.get("envconv:guard", 0) or 0)
-    if layout is None:
-        found, guard = detect_layout(width, height, metadata, pixels)
-    else:
-        found = get_layout(layout)
-        if metadata.get("envconv:layout") != found.name:
-            guard = 0
-    guard >>= level + int(metadata.get("envconv:level", 0) or 0)  # a level's guard is G >> k
-    found.size_from_image(width, height, guard)
+    image = read_file(path, level, part)
+    header = image.header
+    pixels, channels, parts = _with_alpha(image.pixels, header, image.valid)
+    metadata, valid = header.metadata, image.valid
+    found, guard, _ = place_image(header.width, header.height, metadata, layout, pixels, level)
     if found.name == "latlong" and metadata.get("oiio:sampleborder") and (
         "envconv:layout" not in metadata  # envconv's own files use pixel centres
     ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see colorflow.resample_edge_aligned
         from .colorflow import resample_edge_aligned
 
         pixels = resample_edge_aligned(pixels)
-    envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata), pixel_type)
+        valid = None if valid is None else resample_edge_aligned(valid[:, :, None])[:, :, 0]
+    envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata),
+                    header.pixel_type, valid=valid, parts=parts)  # fmt: skip
     return to_working(envmap, input_colorspace, ocio_config)
 
 
-def _read_multi(template: str, layout: str | None, level: int) -> EnvMap:
+def _with_alpha(pixels: np.ndarray, header: FileHeader, valid: np.ndarray | None):
+    """(pixels, channels, parts) of a file's image, with an alpha channel ``A`` (the first
+    part's) holding ``valid`` when the image has holes and no alpha."""
+    channels = header.channels
+    parts = header.part_channels if len(header.chosen) > 1 else ()
+    if valid is None or any(_is_alpha(c) for c in channels):
+        return pixels, channels, parts
+    at = len(header.first.channels)
+    pixels = np.concatenate([pixels[:, :, :at], valid[:, :, None], pixels[:, :, at:]], axis=2)
+    if parts:
+        parts = ((parts[0][0], (*parts[0][1], "A")), *parts[1:])
+    return pixels, (*channels[:at], "A", *channels[at:]), parts
+
+
+def _is_alpha(name: str) -> bool:
+    return name.upper() == "A" or name.lower() == "alpha"
+
+
+def read_header(path: str | os.PathLike, level: int = 0, part: str | None = None):
+    """Width, height, channels and metadata of the map :func:`read` would give (display
+    window; an ``A`` added where the data window leaves holes), from the header alone."""
+    header = read_file_header(path, level, part)
+    channels = header.channels
+    if header.holes and not any(_is_alpha(c) for c in channels):
+        at = len(header.first.channels)
+        channels = (*channels[:at], "A", *channels[at:])
+    return header.width, header.height, channels, header.metadata
+
+
+def _read_multi(template: str, layout: str | None, level: int, part: str | None) -> EnvMap:
     if layout is None:
         first = _part_path(template, "px")
         layout = "cube-faces" if os.path.exists(first) else "paraboloid-split"
     found = get_layout(layout)
     if not found.multi_file:
         raise LayoutError(f"{{face}} in the path needs a multi-file layout, not {found.name}")
-    parts = []
-    for name in found.face_names:
-        parts.append(read_image(_part_path(template, name), level))
-    shapes = {p[0].shape for p in parts}
-    if len(shapes) != 1:
+    images = [read_file(_part_path(template, name), level, part) for name in found.face_names]
+    holes = any(image.valid is not None for image in images)
+    cells = []
+    for image in images:
+        valid = image.valid
+        if holes and valid is None:
+            valid = np.ones(image.pixels.shape[:2], np.float32)
+        cells.append((*_with_alpha(image.pixels, image.header, valid), valid))
+    if len({c[0].shape for c in cells}) != 1 or len({c[1] for c in cells}) != 1:
         raise ImageIOError(f"the {found.name} parts of {template} differ in size or channels")
-    pixels, channels, metadata, pixel_type = parts[0]
-    guard = int(metadata.get("envconv:guard", 0) or 0)
-    if metadata.get("envconv:layout") != found.name:
-        guard = 0
-    guard >>= level + int(metadata.get("envconv:level", 0) or 0)
-    mosaic = np.concatenate([p[0] for p in parts], axis=1)
-    found.size_from_image(mosaic.shape[1], mosaic.shape[0], guard)
-    return EnvMap(mosaic, found, guard, channels, _content_metadata(metadata), pixel_type)
+    header = images[0].header
+    mosaic = np.concatenate([c[0] for c in cells], axis=1)
+    valid = np.concatenate([c[3] for c in cells], axis=1) if holes else None
+    _, guard, _ = place_image(mosaic.shape[1], mosaic.shape[0], header.metadata, found, level=level)
+    return EnvMap(mosaic, found, guard, cells[0][1], _content_metadata(header.metadata),
+                  header.pixel_type, valid=valid, parts=cells[0][2])  # fmt: skip
 
 
-def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
-    """(width, height) of every MIP level of an image file (one entry if it has no chain).
+def mip_levels(path: str | os.PathLike, part: str | None = None) -> list[tuple[int, int]]:
+    """(width, height) of the display window of every MIP level of an image file (of its
+    first part, or ``part``); one entry if it has no chain.
 
     Multi-file layouts (``{face}`` in the path) report the levels of their first file.
     """
@@ -129,11 +171,12 @@ def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
     if "{face}" in path:
         first = _part_path(path, "px")
         path = first if os.path.exists(first) else _part_path(path, "front")
+    index = read_file_header(path, 0, part).chosen[0]
     with _open_input(path) as inp:
-        sizes = []
-        while inp.seek_subimage(0, len(sizes)):
+        sizes: list[tuple[int, int]] = []
+        while inp.seek_subimage(index, len(sizes)):
             spec = inp.spec()
-            sizes.append((spec.width, spec.height))
+            sizes.append((spec.full_width, spec.full_height))
         return sizes
 
 
