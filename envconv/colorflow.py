@@ -61,6 +61,7 @@ __all__ = [
     "COMPRESSIONS",
     "prepare_input",
     "to_working",
+    "working_pixels",
     "encode_output",
     "plan_output",
     "OutputPlan",
@@ -146,6 +147,20 @@ def _convert(pixels: np.ndarray, src: str, dst: str, config: Any) -> np.ndarray:
     out = color.convert_colorspace(clean, src, dst, config)
     out[..., sl] = np.where(bad, pixels[..., sl], out[..., sl])
     return out
+
+
+def working_pixels(
+    pixels: np.ndarray,
+    metadata: dict,
+    pixel_type: str,
+    input_colorspace: str | None = None,
+    ocio_config: str | os.PathLike | None = None,
+) -> np.ndarray:
+    """``pixels`` of a file with this ``metadata`` and ``pixel_type``, converted to the
+    working space as :func:`to_working` converts a map's (for images that are not maps)."""
+    config = _config(ocio_config)
+    src = input_colorspace_of(metadata, pixel_type, input_colorspace, ocio_config)
+    return _convert(pixels, src, color.resolve_colorspace(config, WORKING_COLORSPACE), config)
 
 
 def to_working(

@@ -35,7 +35,7 @@ from .formats import FORMATS, choose_pixel_type
 from .io_write import output_paths, write
 from .layouts import get_layout
 
-__all__ = ["read", "write", "read_image", "read_header", "read_pixel_type", "choose_pixel_type",
+__all__ = ["read", "read_unplaced", "write", "read_image", "read_header", "read_pixel_type", "choose_pixel_type",
            "output_paths", "mip_levels", "FORMATS"]
 
 log = logging.getLogger(__name__)
@@ -119,6 +119,14 @@ def _with_alpha(pixels: np.ndarray, header: FileHeader, valid: np.ndarray | None
     if parts:
         parts = ((parts[0][0], (*parts[0][1], "A")), *parts[1:])
     return pixels, (*channels[:at], "A", *channels[at:]), parts
+
+
+def read_unplaced(path: str | os.PathLike, level: int = 0, part: str | None = None):
+    """(pixels, channels) of an image file as :func:`read` gives a map's, before any layout
+    is placed (display window; holes 0, with an ``A`` added): for images that fit none."""
+    image = read_file(os.fspath(path), level, part)
+    pixels, channels, _ = _with_alpha(image.pixels, image.header, image.valid)
+    return pixels, channels
 
 
 def _is_alpha(name: str) -> bool:
