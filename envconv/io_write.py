@@ -86,6 +86,7 @@ def write(
     """
     from .colorflow import encode_output
 
+    _check_parts(envmap, os.fspath(path))
     encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
                             compression)  # fmt: skip
     for message in encoded.warnings:
@@ -119,6 +120,21 @@ def write(
     return paths
 
 
+def _check_parts(envmap: EnvMap, path: str) -> None:
+    """Refuse, before any work, what a multi-part map cannot be written as."""
+    if not envmap.parts:
+        return
+    fmt = format_of(path)[0]
+    names = ", ".join(name for name, _ in envmap.parts)
+    if fmt != "openexr":
+        raise ImageIOError(f"cannot write {path}: {fmt} holds one image, not the parts {names} "
+                           "of the input; pass --part NAME to read one, or write .exr")  # fmt: skip
+    if envmap.levels is not None and "{level}" not in path:
+        raise ImageIOError(f"cannot write {path}: OpenImageIO writes no MIP levels into a "
+                           "multi-part OpenEXR; put {level} in the path for one file per level, "
+                           "or pass --part NAME to read one part")  # fmt: skip
+
+
 def _cells(layout, pixels: np.ndarray) -> list[np.ndarray]:
     """The per-file images of one level: the whole image, or each cell of a multi-file map."""
     if not layout.multi_file:
@@ -136,36 +152,64 @@ def _temp_path(target: str) -> str:
 
 
 def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
-    """Write one file: ``images`` holds one image, or the levels of a MIP-mapped file."""
+    """Write one file: ``images`` holds one image, or the levels of a MIP-mapped file; a map
+    with parts is written as a multi-part OpenEXR file, one part per entry of ``parts``."""
     fmt = format_of(target)[0]
     if len(images) > 1:
         full = max(images[0].shape[:2]).bit_length()
         if fmt not in ("openexr", "tiff"):
             raise ImageIOError(
                 f"cannot write {target}: {fmt} holds one image, not {len(images)} MIP levels; "
-                "put {level} in the output path for one file per level, e.g. sky_{level}.png"
+                "put {level} in the path for one file per level, e.g. sky_{level}.png"
             )
         if fmt == "openexr" and len(images) != full:
             raise ImageIOError(
                 f"cannot write {target}: a MIP-mapped OpenEXR holds all {full} levels down to "
                 f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
             )
-    levels = [_level_image(target, pixels, envmap, face, bit_depth, compression, level)
-              for pixels in images]  # fmt: skip
-    oiio = _oiio()
-    out = oiio.ImageOutput.create(temp)
-    if out is None:
-        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
-    try:
-        for k, image in enumerate(levels):
+    if envmap.parts:
+        writes = _part_writes(target, images[0], envmap, face, bit_depth, compression, level)
+    else:
+        writes = []
+        for k, pixels in enumerate(images):
+            image = _level_image(target, pixels, envmap, face, bit_depth, compression, level)
             spec = _image_spec(image)
             mode = "Create"
             if len(images) > 1:
                 _set_mip_attributes(spec, fmt)
                 mode = "Create" if k == 0 else "AppendMIPLevel" if fmt == "openexr" else "AppendSubimage"
-            if not out.open(temp, spec, mode):
+            writes.append((spec, mode, image.data))
+    _run_writes(temp, target, writes)
+
+
+def _part_writes(target, pixels, envmap, face, bit_depth, compression, level):
+    """(spec, mode, data) of every part of a multi-part file: the first opens the file with
+    all the parts' specs, as OpenEXR needs them all in its header."""
+    writes, start = [], 0
+    for name, names in envmap.parts:
+        data = pixels[:, :, start : start + len(names)]
+        start += len(names)
+        image = _level_image(target, data, envmap, face, bit_depth, compression, level, names)
+        image.attributes.append(("name", name))
+        writes.append((_image_spec(image), "AppendSubimage", image.data))
+    specs = [spec for spec, _, _ in writes]
+    writes[0] = (specs, "Create", writes[0][2])
+    return writes
+
+
+def _run_writes(temp, target, writes) -> None:
+    """Open ``temp`` and write each (spec or list of specs, mode, data) in turn; one-line
+    errors naming ``target``."""
+    oiio = _oiio()
+    out = oiio.ImageOutput.create(temp)
+    if out is None:
+        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
+    try:
+        for spec, mode, data in writes:
+            opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
+            if not opened:
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-            if not out.write_image(image.data):
+            if not out.write_image(data):
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
     finally:
         ok = out.close()
@@ -205,11 +249,13 @@ class LevelImage(NamedTuple):
     data: np.ndarray
 
 
-def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, level=None):
-    """The :class:`LevelImage` of one image of ``envmap`` written to ``target``."""
+def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, level=None,
+                 channels=None):  # fmt: skip
+    """The :class:`LevelImage` of one image of ``envmap`` written to ``target`` (of one of
+    its parts when ``channels`` names that part's channels)."""
     fmt, _, _, max_channels = format_of(target)
     pixel_type = choose_pixel_type(target, envmap.pixel_type, bit_depth)
-    channels = list(envmap.channels)
+    channels = list(envmap.channels if channels is None else channels)
     if max_channels is not None and len(channels) > max_channels:
         log.warning(
             "%s stores at most %d channels; writing %s",
@@ -223,7 +269,7 @@ def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, l
         pixels = np.repeat(pixels[:, :, :1], 3, axis=2)
         channels = ["R", "G", "B"]
     nch = pixels.shape[2]
-    alpha = envmap.alpha_index if envmap.alpha_index is not None and envmap.alpha_index < nch else None
+    alpha = next((k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None)
     attributes: list[tuple[str, Any]] = []
     if alpha is not None and fmt in ("png", "tiff"):
         # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
