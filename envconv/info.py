@@ -77,7 +77,8 @@ def describe(path: str, layout: str | None = None, level: int = 0, part: str | N
     """
     from .colorflow import input_colorspace_of, working_pixels
     from .detect import find_layout
-    from .io import mip_levels, read, read_file_header, read_unplaced
+    from .file_io import read_file_header
+    from .io import mip_levels, read, read_unplaced
 
     path = str(path)
     header = read_file_header(_first_file(path, layout), level, part)

@@ -35,8 +35,8 @@ from .formats import FORMATS, choose_pixel_type
 from .io_write import output_paths, write
 from .layouts import get_layout
 
-__all__ = ["read", "read_unplaced", "write", "read_image", "read_header", "read_pixel_type", "choose_pixel_type",
-           "output_paths", "mip_levels", "FORMATS"]
+__all__ = ["read", "read_unplaced", "write", "read_image", "read_header", "read_pixel_type",
+           "choose_pixel_type", "output_paths", "mip_levels", "FORMATS"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
