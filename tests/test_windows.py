@@ -206,3 +206,24 @@ def test_an_unknown_aspect_lists_the_aspects_layouts_have(tmp_path):
         envconv.read(tmp_path / "odd.exr")
     message = str(info.value)
     assert "63x43" in message and "2:1 latlong or paraboloid" in message and "3:4 cube-vcross" in message
+
+
+def test_every_mip_level_treats_a_hole_as_a_hole(tmp_path):
+    """A constant sky held above a hole: every level of the chain is the constant wherever it
+    holds anything, and each level's alpha is the solid-angle-weighted block average of the
+    level above it (the chain's own rule, docs/masks-guards-mips.md)."""
+    write_window(tmp_path / "flat.exr", np.full((13, 64, 3), 3.0, np.float32), (0, 0, 64, 32), (0, 0, 64, 13))
+    env = envconv.read(tmp_path / "flat.exr")
+    result = envconv.sourcemap.convert_source(env, "latlong", size=16, mips=True)
+    assert len(result.levels) == 6
+    for k, level in enumerate(result.levels):
+        held = level[:, :, 3] > 0
+        assert held.any() and (k > 2 or not held.all()), k
+        np.testing.assert_allclose(level[held][:, :3], 3.0, rtol=1e-5)
+        np.testing.assert_array_equal(level[~held], 0)
+        if k and result.levels[k - 1].shape[0] >= 2:  # 2 x 2 blocks (down to 2 x 1)
+            finer = result.levels[k - 1][:, :, 3]
+            omega = naive.pixel_solid_angles("latlong", finer.shape[0], 8)
+            shape = (level.shape[0], 2, level.shape[1], 2)
+            blocks = (finer * omega).reshape(shape).sum(axis=(1, 3)) / omega.reshape(shape).sum(axis=(1, 3))
+            np.testing.assert_allclose(level[:, :, 3], blocks, atol=1e-4)
