@@ -6,8 +6,7 @@
 >>> envconv.write(cube, "sky_cross.exr")                 # doctest: +SKIP
 
 ``import envconv`` is cheap: ``EnvMap``, ``read``, ``write``, ``convert`` and the submodules
-load on first use, so that the command line can start decoding its input before numba and
-the layouts are imported (see :mod:`envconv.file_io`).
+load on first use, so that a command imports only what it uses.
 """
 
 from __future__ import annotations
@@ -18,12 +17,6 @@ from typing import TYPE_CHECKING
 from .errors import ColorError, EnvconvError, ImageIOError, LayoutError, UsageError
 
 __version__ = "0.1.0"
-
-#: True in a process that envconv's command line runs (set by ``envconv.cli.main.main``): its
-#: start-up may skip what a library import inside someone else's program must not: importing
-#: numba at all while its cached kernels serve (``envconv._jit``), and PyYAML with numba
-#: (``envconv._jit._import_numba``).
-_COMMAND_LINE_PROCESS = False
 
 __all__ = [
     "EnvMap",

@@ -31,7 +31,8 @@ from .pipeline import (
     count_levels,
     path_variables,
 )  # fmt: skip
-from .resample import convert, default_size
+from .resample import default_size
+from .sourcemap import convert_source
 
 __all__ = ["Walk", "SourceHeader"]
 
@@ -42,27 +43,20 @@ class SourceHeader:
     """What a plan knows of a source: layout, size, guard and channels, from the header."""
 
     def __init__(self, path: str, options: dict[str, Any]) -> None:
-        from .detect import detect_layout
+        from .detect import place_image
 
         level = int(options.get("level", 0) or 0)
         layout, first = options.get("layout"), path
         if "{face}" in path:
             from .face_files import find_face_files
 
-            found = find_face_files(path, layout, options.get("faces"))
-            layout, first = found.layout, found.paths[0]
-        width, height, channels, metadata = io.read_header(first, level)
-        guard = int(metadata.get("envconv:guard", 0) or 0)
-        if layout is None:
-            found, guard = detect_layout(width, height, metadata)
-        else:
-            found = get_layout(layout)
-            guard = guard if metadata.get("envconv:layout") == found.name else 0
-        guard = guard // (1 << level) if level else guard
-        if found.multi_file:
-            width *= found.n_faces
-        self.layout, self.guard, self.channels = found, guard, channels
-        self.size = found.size_from_image(width, height, guard)
+            files = find_face_files(path, layout, options.get("faces"))
+            layout, first = files.layout, files.paths[0]
+        width, height, channels, metadata = io.read_header(first, level, options.get("part"))
+        if layout is not None and get_layout(layout).multi_file:
+            width *= get_layout(layout).n_faces
+        found, guard, size = place_image(width, height, metadata, layout, level=level)
+        self.layout, self.guard, self.channels, self.size = found, guard, channels, size
 
 
 class Walk:
@@ -128,7 +122,7 @@ class Walk:
         guard = kwargs.get("guard", 0)
         guard = 0 if guard == "fill" else int(guard)
         if self.executing:
-            env = convert(self.source, **kwargs)
+            env = convert_source(self.source, **kwargs)
             size = env.size
         else:
             env = None

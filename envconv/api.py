@@ -7,7 +7,7 @@ import os
 from typing import Any
 
 from . import io
-from .resample import convert
+from .sourcemap import convert_source
 
 __all__ = ["convert_file", "plan_convert", "route_face_sets"]
 
@@ -48,7 +48,7 @@ def convert_file(
             log.warning("%s", note)
     else:
         warnings.extend(notes)
-    result = convert(source, to, **resample)
+    result = convert_source(source, to, **resample)
     return io.write(result, output_path, **write, warnings=warnings)
 
 
@@ -76,8 +76,9 @@ def plan_convert(
     output = Pipeline([Read(input_path, **read), Resample(**resample),
                        Write(output_path, **faces)]).plan()[0]  # fmt: skip
     first = _first_file(os.fspath(input_path), read.get("layout"), read.get("faces"))
-    _, _, channels, metadata = io.read_header(first, int(read.get("level", 0) or 0))
-    pixel_type = io.read_pixel_type(first)
+    level, part = int(read.get("level", 0) or 0), read.get("part")
+    _, _, channels, metadata = io.read_header(first, level, part)
+    pixel_type = io.read_pixel_type(first, part)
     config = write.get("ocio_config") or read.get("ocio_config")
     source = input_colorspace_of(metadata, pixel_type, read.get("input_colorspace"), config)
     working = input_colorspace_of({}, "float", WORKING_COLORSPACE, config)

@@ -41,7 +41,6 @@ from envconv.errors import ColorError
 __all__ = [
     "load_config",
     "builtin_config",
-    "BuiltinConfig",
     "resolve_colorspace",
     "default_colorspace",
     "colorspace_from_metadata",
@@ -87,61 +86,6 @@ def _ocio():
     import PyOpenColorIO
 
     return PyOpenColorIO
-
-
-_LINEAR_REC709_NAME = "Linear Rec.709 (sRGB)"
-#: What OCIO's built-in config answers to the questions a default conversion asks (float or
-#: EXR in, EXR out, linear Rec.709 throughout), per OpenColorIO version. Questions:
-#: ("resolve", name), ("default", kind) and ("metadata_name", canonical name).
-#: tests/test_color.py checks every answer against the installed OCIO.
-_BUILTIN_ANSWERS: dict[str, dict[tuple[str, str], str]] = {
-    "2.6.0": {
-        ("resolve", "linear"): _LINEAR_REC709_NAME,
-        ("resolve", "lin_rec709_scene"): _LINEAR_REC709_NAME,
-        ("resolve", _LINEAR_REC709_NAME): _LINEAR_REC709_NAME,
-        ("default", "linear Rec.709"): _LINEAR_REC709_NAME,
-        ("metadata_name", _LINEAR_REC709_NAME): "lin_rec709_scene",
-    },
-}
-
-
-class BuiltinConfig:
-    """OCIO's built-in default config (``ocio://default``), loaded on first use.
-
-    The few questions a default conversion asks of it are answered from a table for the
-    OpenColorIO version that the table was checked against, without importing PyOpenColorIO
-    (0.02 s of a one-shot convert). Anything else, such as a conversion or an unknown name,
-    loads the config: every OCIO method is delegated to it.
-    """
-
-    def __init__(self, answers: dict[tuple[str, str], str]):
-        self._answers = answers
-        self._config = None
-
-    def answer(self, question: tuple[str, str]) -> str | None:
-        return self._answers.get(question)
-
-    def __getattr__(self, name: str) -> Any:
-        if name.startswith("_"):
-            raise AttributeError(name)
-        if self._config is None:
-            self._config = load_config(DEFAULT_CONFIG)
-        return getattr(self._config, name)
-
-
-def _ocio_version() -> str | None:
-    """OpenColorIO's installed version; None when it is not installed as a distribution
-    (conda, a build tree): then there is no table."""
-    from ._versions import installed_version
-
-    try:
-        return installed_version("opencolorio")
-    except Exception:
-        return None
-
-
-def _answer(config: Any, question: tuple[str, str]) -> str | None:
-    return config.answer(question) if isinstance(config, BuiltinConfig) else None
 
 
 def load_config(path: str | os.PathLike[str] | None = None) -> Any:
@@ -194,10 +138,8 @@ def load_config(path: str | os.PathLike[str] | None = None) -> Any:
 
 @lru_cache(maxsize=1)
 def builtin_config() -> Any:
-    """OCIO's built-in default config: a :class:`BuiltinConfig` where the installed
-    OpenColorIO's answers are known, else the loaded config."""
-    answers = _BUILTIN_ANSWERS.get(_ocio_version() or "")
-    return BuiltinConfig(answers) if answers else load_config(DEFAULT_CONFIG)
+    """OCIO's built-in default config (``ocio://default``), loaded once and kept."""
+    return load_config(DEFAULT_CONFIG)
 
 
 def _all_colorspaces(config: Any) -> list[Any]:
@@ -253,9 +195,6 @@ def resolve_colorspace(config: Any, name: str) -> str:
     """
     name = str(name).strip()
     if name:
-        known = _answer(config, ("resolve", name))
-        if known is not None:
-            return known
         found = _lookup(config, (name,)) or _lookup(config, _FRIENDLY.get(_key(name), ()))
         if found is not None:
             return found
@@ -304,7 +243,7 @@ def default_colorspace(config: Any, file_format: str, pixel_type: Any) -> str:
             f"cannot choose a default colour space for {fmt!r} with pixel type "
             f"{ptype!r}; pass --input-colorspace/--output-colorspace"
         )
-    found = _answer(config, ("default", kind)) or _lookup(config, candidates)
+    found = _lookup(config, candidates)
     if found is None:
         raise ColorError(
             f"OCIO config {config.getName()!r} has no {kind} colour space "
@@ -357,9 +296,6 @@ def metadata_name(config: Any, name: str) -> str:
     'lin_ap1_scene'
     """
     found = resolve_colorspace(config, name)
-    known = _answer(config, ("metadata_name", found))
-    if known is not None:
-        return known
     get_id = getattr(config.getColorSpace(found), "getInteropID", None)  # OCIO >= 2.5
     interop = get_id() if get_id is not None else ""
     return interop or found

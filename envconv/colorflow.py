@@ -61,6 +61,7 @@ __all__ = [
     "COMPRESSIONS",
     "prepare_input",
     "to_working",
+    "working_pixels",
     "encode_output",
     "plan_output",
     "OutputPlan",
@@ -96,7 +97,7 @@ _PRIMARIES = re.compile(r"_(rec709|ap1|ap0)_scene$")
 @lru_cache(maxsize=8)
 def _load(path: str | None, env: str | None) -> Any:
     if path is None and not (env or "").strip():
-        return color.builtin_config()  # loaded only if a question needs OCIO
+        return color.builtin_config()
     return color.load_config(path)
 
 
@@ -146,6 +147,20 @@ def _convert(pixels: np.ndarray, src: str, dst: str, config: Any) -> np.ndarray:
     out = color.convert_colorspace(clean, src, dst, config)
     out[..., sl] = np.where(bad, pixels[..., sl], out[..., sl])
     return out
+
+
+def working_pixels(
+    pixels: np.ndarray,
+    metadata: dict,
+    pixel_type: str,
+    input_colorspace: str | None = None,
+    ocio_config: str | os.PathLike | None = None,
+) -> np.ndarray:
+    """``pixels`` of a file with this ``metadata`` and ``pixel_type``, converted to the
+    working space as :func:`to_working` converts a map's (for images that are not maps)."""
+    config = _config(ocio_config)
+    src = input_colorspace_of(metadata, pixel_type, input_colorspace, ocio_config)
+    return _convert(pixels, src, color.resolve_colorspace(config, WORKING_COLORSPACE), config)
 
 
 def to_working(
@@ -283,10 +298,10 @@ def plan_output(
     ``pixel_type`` and ``metadata`` are the map's (its ``oiio:ColorSpace`` says what colour
     space its pixels are in; float data without one is taken as linear Rec.709).
     """
-    from . import io
+    from .formats import WRITE_FORMATS, choose_pixel_type
 
-    fmt = io.WRITE_FORMATS.get(Path(os.fspath(path)).suffix.lower(), ("",))[0]
-    ptype = io.choose_pixel_type(os.fspath(path), pixel_type, bit_depth)
+    fmt = WRITE_FORMATS.get(Path(os.fspath(path)).suffix.lower(), ("",))[0]
+    ptype = choose_pixel_type(os.fspath(path), pixel_type, bit_depth)
     config = _config(ocio_config)
     src = input_colorspace_of(metadata, pixel_type, None, ocio_config)
     if output_colorspace:

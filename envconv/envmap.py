@@ -37,6 +37,15 @@ class EnvMap:
         ``H_k = max(H >> k, 1)``, ``W_k = max(W >> k, 1)`` (per file for multi-file layouts),
         same channels and the same uv ↔ direction mapping as ``pixels``; ``levels[0]`` is
         ``pixels``. None when the map has no mip chain (see :mod:`envconv.mips`).
+    valid : numpy.ndarray, optional
+        (H, W) float32: 1 where the file held the pixel, 0 in a hole (a display-window pixel
+        outside the data window; its channels are 0, alpha included). None when every pixel
+        was held. Only maps read from files have one; resampling turns holes into alpha
+        (see :mod:`envconv.sourcemap`).
+    parts : tuple of (str, tuple of str)
+        For a map read from several parts of a multi-part OpenEXR file: each part's name and
+        its own channel names, in the order their channels sit in ``channels``. Written back
+        as parts of those names; empty for a single image.
     """
 
     pixels: np.ndarray
@@ -46,6 +55,8 @@ class EnvMap:
     metadata: dict[str, Any] = field(default_factory=dict)
     pixel_type: str = "float"
     levels: list[np.ndarray] | None = None
+    valid: np.ndarray | None = None
+    parts: tuple[tuple[str, tuple[str, ...]], ...] = ()
 
     def __post_init__(self) -> None:
         self.layout = get_layout(self.layout)
@@ -65,6 +76,14 @@ class EnvMap:
         _ = self.size  # validates that the pixels fit the layout
         if self.levels is not None:
             self._check_levels()
+        if self.valid is not None:
+            self.valid = np.ascontiguousarray(self.valid, dtype=np.float32)
+            if self.valid.shape != self.pixels.shape[:2]:
+                raise LayoutError(f"valid has shape {self.valid.shape}; expected {self.pixels.shape[:2]}")
+        self.parts = tuple((str(name), tuple(names)) for name, names in self.parts)
+        if self.parts and sum(len(names) for _, names in self.parts) != len(self.channels):
+            raise LayoutError(f"parts hold {sum(len(n) for _, n in self.parts)} channels, "
+                              f"the map {len(self.channels)}")  # fmt: skip
 
     def _check_levels(self) -> None:
         levels = [np.ascontiguousarray(level, dtype=np.float32) for level in self.levels]

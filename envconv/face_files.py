@@ -15,13 +15,11 @@ from __future__ import annotations
 import os
 from typing import NamedTuple
 
-import numpy as np
-
 from .errors import ImageIOError, LayoutError
-from .facesets import FACE_SETS, FaceSet, get_face_set, to_envconv
+from .facesets import FACE_SETS, FaceSet, get_face_set
 from .layouts import get_layout
 
-__all__ = ["FaceFiles", "find_face_files", "part_path", "read_face_files"]
+__all__ = ["FaceFiles", "find_face_files", "part_path"]
 
 _CUBE = "cube-faces"
 _PARABOLOID = "paraboloid-split"
@@ -140,21 +138,3 @@ def _missing_message(template: str, partial) -> str:
         return f"{template}: the {cand.label} face files are incomplete: no {missing}"
     sets = "; ".join(f"{c.label}: {' '.join(c.names)}" for _, c, _ in partial)
     return f"no files match {template} (face names tried: {sets})"
-
-
-def read_face_files(template: str, layout: str | None, level: int, faces, read_image):
-    """Read the parts of ``template``: (pixels, channels, metadata, pixel_type, layout).
-
-    ``pixels`` is the in-memory mosaic of the layout: the parts side by side in face order,
-    each cube face turned from the face set's orientation into envconv's.
-    """
-    found = find_face_files(template, layout, faces)
-    parts = [read_image(path, level) for path in found.paths]
-    shapes = {p[0].shape for p in parts}
-    if len(shapes) != 1:
-        raise ImageIOError(f"the {found.layout} parts of {template} differ in size or channels")
-    images = [p[0] for p in parts]
-    if found.face_set is not None:
-        images = to_envconv(found.face_set, images)
-    pixels, channels, metadata, pixel_type = parts[0]
-    return np.concatenate(images, axis=1), channels, metadata, pixel_type, found.layout

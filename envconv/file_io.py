@@ -1,42 +1,48 @@
 """One image file to and from float32 pixels and its header, through OpenImageIO and OpenEXR.
 
 This module knows files, not layouts: :mod:`envconv.io` builds environment maps on top of it.
-It imports neither numba nor the layouts, so a command can start decoding its input on a
-helper thread (:func:`read_ahead`) while the rest of envconv is still being imported: OIIO and
-OpenEXR release the GIL while they decode. Plain scanline EXRs are decoded by OpenEXR, and the
-commonest (RGB or RGBA, with attributes OIIO's reading of which is known) are read by it alone,
-so that OIIO is not imported (:mod:`envconv.exr_io`); everything else is read by OIIO.
+OpenImageIO opens every file and reads every header; the pixels of plain scanline EXRs are
+decoded by the OpenEXR library, which is faster at it (:mod:`envconv.exr_io`).
+
+Windows
+    An image is its **display window**, as OpenEXR defines it (OIIO's ``full_x``, ``full_y``,
+    ``full_width``, ``full_height``; TIFF's XPosition/YPosition give the same). The pixels
+    stored, the **data window** (OIIO's ``x``, ``y``, ``width``, ``height``), land where their
+    coordinates put them: display-window pixels outside the data window are zero (a *hole*,
+    marked 0 in :attr:`FileImage.valid`), and stored pixels outside the display window
+    (overscan) are not read into the image.
+Parts
+    Every part (OIIO subimage) is listed in :class:`FileHeader`. Of a multi-part OpenEXR file
+    the parts that are images of the first part's windows (beauty and AOVs of one
+    environment: same display and data window, not deep) are read together, their channels
+    side by side in part order, the first part's under their own names and the others'
+    prefixed ``PART.`` unless they already are; other parts are skipped with a warning.
+    ``part=NAME`` (or an index) reads one part alone, of any format.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import re
-import stat
-import threading
 from contextlib import contextmanager
-from typing import Any
+from dataclasses import dataclass
+from typing import Any, NamedTuple
 
 import numpy as np
 
 from .errors import ImageIOError
 from .exr_io import is_plain_exr as _plain_exr
 from .exr_io import read_exr_pixels as _read_exr_pixels
-from .exr_io import read_plain_exr as _read_plain_exr
-from .exr_io import read_plain_exr_header as _read_plain_exr_header
+from .formats import FORMATS
 
-__all__ = ["read_image", "read_header", "read_pixel_type", "read_ahead", "join_read_ahead", "FORMATS"]
+__all__ = ["read_file", "read_file_header", "read_image", "read_header", "read_pixel_type",
+           "FileHeader", "FileImage", "Part", "FORMATS"]  # fmt: skip
 
-#: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
-FORMATS = {
-    ".exr": ("openexr", ("half", "float"), None, None),
-    ".hdr": ("hdr", ("float",), "float", 3),
-    ".tif": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
-    ".tiff": ("tiff", ("uint8", "uint16", "half", "float"), None, None),
-    ".png": ("png", ("uint8", "uint16"), "uint8", 4),
-    ".jpg": ("jpeg", ("uint8",), "uint8", 3),
-    ".jpeg": ("jpeg", ("uint8",), "uint8", 3),
-}
+log = logging.getLogger(__name__)
+
+#: Pixel types from narrowest to widest: parts read together report the widest.
+_WIDTH_ORDER = ("uint8", "int8", "uint16", "int16", "half", "uint", "int", "float", "double")
 
 
 def _oiio():
@@ -45,66 +51,103 @@ def _oiio():
     return OpenImageIO
 
 
-def read_image(path: str | os.PathLike, level: int = 0):
-    """Read one image file as float32 (H, W, C).
+@dataclass(frozen=True)
+class Part:
+    """One part (OIIO subimage) of a file, at the MIP level read.
 
-    Takes the result of :func:`read_ahead` when that decoded this same, unchanged file.
+    Windows are ``(x, y, width, height)`` in the file's pixel coordinates."""
 
-    Returns
-    -------
-    pixels, channel names, metadata dict, pixel type (``half``/``float``/``uint8``/``uint16``)
-    """
-    path = os.fspath(path)
-    ahead = _take_read_ahead(path, level)
-    if ahead is not None:
-        return ahead
-    return _decode(path, level)
+    index: int
+    name: str
+    channels: tuple[str, ...]
+    channel_types: tuple[str, ...]
+    display: tuple[int, int, int, int]
+    data: tuple[int, int, int, int]
+    deep: bool = False
 
 
-def _decode(path: str, level: int, threads: int | None = None):
+@dataclass(frozen=True)
+class FileHeader:
+    """What a file's header says, and which of its parts a read takes (``chosen``)."""
+
+    path: str
+    format: str
+    level: int
+    parts: tuple[Part, ...]
+    chosen: tuple[int, ...]
+    skipped: tuple[tuple[str, str], ...]
+    metadata: dict[str, Any]
+
+    @property
+    def first(self) -> Part:
+        return self.parts[self.chosen[0]]
+
+    @property
+    def display(self) -> tuple[int, int, int, int]:
+        return self.first.display
+
+    @property
+    def data(self) -> tuple[int, int, int, int]:
+        return self.first.data
+
+    @property
+    def width(self) -> int:
+        return self.display[2]
+
+    @property
+    def height(self) -> int:
+        return self.display[3]
+
+    @property
+    def holes(self) -> bool:
+        """True when the data window leaves part of the display window empty."""
+        (dx, dy, dw, dh), (x, y, w, h) = self.display, self.data
+        return not (x <= dx and y <= dy and x + w >= dx + dw and y + h >= dy + dh)
+
+    @property
+    def part_channels(self) -> tuple[tuple[str, tuple[str, ...]], ...]:
+        """(part name, its own channel names) of every part read, in order."""
+        return tuple((self.parts[i].name, self.parts[i].channels) for i in self.chosen)
+
+    @property
+    def channels(self) -> tuple[str, ...]:
+        """Channel names of the image read: the first part's, then the others' prefixed."""
+        names: list[str] = list(self.first.channels)
+        for index in self.chosen[1:]:
+            part = self.parts[index]
+            names += [c if c.startswith(f"{part.name}.") else f"{part.name}.{c}" for c in part.channels]
+        return tuple(names)
+
+    @property
+    def channel_types(self) -> tuple[str, ...]:
+        return tuple(t for i in self.chosen for t in self.parts[i].channel_types)
+
+    @property
+    def pixel_type(self) -> str:
+        """The widest channel type of the parts read (``half``, ``float``, ``uint8``...)."""
+        types = set(self.channel_types)
+        return max(types, key=lambda t: _WIDTH_ORDER.index(t) if t in _WIDTH_ORDER else -1)
+
+
+class FileImage(NamedTuple):
+    """A file's image over its display window: ``pixels`` (H, W, C) float32, zero in holes;
+    ``valid`` (H, W) float32, 1 where the data window holds the pixel, 0 in holes, or None
+    when it holds every pixel."""
+
+    header: FileHeader
+    pixels: np.ndarray
+    valid: np.ndarray | None
+
+
+@contextmanager
+def _open_input(path: str, config=None):
+    """An open OIIO ImageInput for ``path`` (closed on exit); one-line errors otherwise."""
+    oiio = _oiio()
     if not os.path.exists(path):
         raise ImageIOError(f"input file not found: {path}")
     if os.path.isdir(path):
         raise ImageIOError(f"input is a directory, not an image: {path}")
-    if level == 0 and path.lower().endswith(".exr"):
-        plain = _read_plain_exr(path, threads)  # OIIO's reading, without loading OIIO
-        if plain is not None:
-            return plain
-    oiio = _oiio()
-    # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
-    # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.
-    config = oiio.ImageSpec()
-    config.attribute("oiio:UnassociatedAlpha", 1)
-    inp = oiio.ImageInput.open(path, config)
-    if inp is None:
-        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
-    try:
-        if level and not inp.seek_subimage(0, level):
-            raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
-        spec = inp.spec()
-        pixels = None
-        if level == 0 and _plain_exr(inp, spec):
-            pixels = _read_exr_pixels(path, spec, threads)
-        if pixels is None:
-            pixels = inp.read_image(0, level, 0, spec.nchannels, oiio.FLOAT)
-        if pixels is None or inp.has_error:
-            raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
-        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
-        channels = tuple(spec.channelnames)
-        pixel_type = str(spec.format)
-    finally:
-        inp.close()
-    pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
-    return np.ascontiguousarray(pixels), channels, metadata, pixel_type
-
-
-@contextmanager
-def _open_input(path: str):
-    """An open OIIO ImageInput for ``path`` (closed on exit); one-line errors otherwise."""
-    oiio = _oiio()
-    if not os.path.isfile(path):
-        raise ImageIOError(f"input file not found: {path}")
-    inp = oiio.ImageInput.open(path)
+    inp = oiio.ImageInput.open(path) if config is None else oiio.ImageInput.open(path, config)
     if inp is None:
         raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
     try:
@@ -113,30 +156,168 @@ def _open_input(path: str):
         inp.close()
 
 
-def read_header(path: str | os.PathLike, level: int = 0):
+def _part(spec, index: int) -> Part:
+    nch = spec.nchannels
+    types = tuple(str(t) for t in spec.channelformats) or (str(spec.format),) * nch
+    return Part(
+        index=index,
+        name=spec.get_string_attribute("name") or spec.get_string_attribute("oiio:subimagename"),
+        channels=tuple(spec.channelnames),
+        channel_types=types,
+        display=(spec.full_x, spec.full_y, spec.full_width, spec.full_height),
+        data=(spec.x, spec.y, spec.width, spec.height),
+        deep=bool(spec.deep),
+    )
+
+
+def _header(inp, path: str, level: int, part: str | int | None) -> FileHeader:
+    """Every part's facts at MIP ``level``, and the choice of parts to read."""
+    parts, metadata = [], None
+    while inp.seek_subimage(len(parts), 0):
+        index = len(parts)
+        if inp.seek_subimage(index, level):
+            parts.append(_part(inp.spec(), index))
+        else:
+            inp.geterror()  # clear the failed seek's message
+            parts.append(None)
+        if metadata is None and parts[-1] is not None:
+            metadata = {a.name: a.value for a in inp.spec().extra_attribs}
+    inp.geterror()  # clear the message of the seek past the last part
+    found = [p for p in parts if p is not None]
+    if not found:
+        raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
+    chosen, skipped = _choose(path, inp.format_name(), parts, part)
+    if part is not None or chosen[0] != 0:  # the metadata of the part read
+        inp.seek_subimage(chosen[0], level)
+        metadata = {a.name: a.value for a in inp.spec().extra_attribs}
+    header = FileHeader(path, inp.format_name(), level, tuple(parts), chosen, skipped,
+                        _tags_from_description(metadata or {}))  # fmt: skip
+    if header.first.deep:
+        raise ImageIOError(f"cannot read {path}: part {header.first.name or 0} holds deep data, "
+                           "not an image; pick another with --part")  # fmt: skip
+    return header
+
+
+def _choose(path, fmt, parts, wanted) -> tuple[tuple[int, ...], tuple[tuple[str, str], ...]]:
+    """Indices of the parts to read, and (name, why) of those left out."""
+    names = [p.name if p and p.name else str(k) for k, p in enumerate(parts)]
+    if wanted is not None:
+        text = str(wanted)
+        hits = [k for k, name in enumerate(names) if name == text]
+        if not hits and text.isdigit() and int(text) < len(parts):
+            hits = [int(text)]
+        if not hits or parts[hits[0]] is None:
+            raise ImageIOError(f"{path} has no part {text!r}; its parts: {', '.join(names)}")
+        return (hits[0],), tuple((n, "not asked for") for k, n in enumerate(names) if k != hits[0])
+    first = parts[0]
+    if first is None:
+        raise ImageIOError(f"cannot read {path}: its first part has no such MIP level")
+    chosen, skipped = [0], []
+    for k, part in enumerate(parts[1:], 1):
+        if fmt != "openexr":
+            why = "only OpenEXR parts are read together; pick one with --part"
+        elif part is None:
+            why = "no such MIP level"
+        elif part.deep:
+            why = "deep data"
+        elif (part.display, part.data) != (first.display, first.data):
+            why = f"its windows differ from part {names[0]}'s"
+        else:
+            chosen.append(k)
+            continue
+        skipped.append((names[k], why))
+    return tuple(chosen), tuple(skipped)
+
+
+def read_file_header(path: str | os.PathLike, level: int = 0, part: str | int | None = None):
+    """The :class:`FileHeader` of ``path`` at MIP ``level``, without its pixels."""
+    path = os.fspath(path)
+    with _open_input(path) as inp:
+        return _header(inp, path, level, part)
+
+
+def read_file(path: str | os.PathLike, level: int = 0, part: str | int | None = None) -> FileImage:
+    """Read an image file over its display window (see the module docstring)."""
+    path = os.fspath(path)
+    oiio = _oiio()
+    # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
+    # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.
+    config = oiio.ImageSpec()
+    config.attribute("oiio:UnassociatedAlpha", 1)
+    with _open_input(path, config) as inp:
+        header = _header(inp, path, level, part)
+        stacks = [_read_part(inp, path, index, level) for index in header.chosen]
+    if part is None:
+        for name, why in header.skipped:
+            log.warning("%s: part %s is not read (%s)", path, name, why)
+    pixels = stacks[0] if len(stacks) == 1 else np.concatenate(stacks, axis=2)
+    pixels, valid = place_in_display(pixels, header.display, header.data)
+    return FileImage(header, pixels, valid)
+
+
+def _read_part(inp, path: str, index: int, level: int) -> np.ndarray:
+    """The data window of part ``index`` at ``level``: (h, w, C) float32."""
+    oiio = _oiio()
+    if not inp.seek_subimage(index, level):
+        raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
+    spec = inp.spec()
+    pixels = None
+    if level == 0 and _plain_exr(inp, spec):
+        pixels = _read_exr_pixels(path, spec)
+    if pixels is None:
+        pixels = inp.read_image(index, level, 0, spec.nchannels, oiio.FLOAT)
+    if pixels is None or inp.has_error:
+        raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
+    pixels = np.asarray(pixels, np.float32).reshape(spec.height, spec.width, spec.nchannels)
+    return np.ascontiguousarray(pixels)
+
+
+def place_in_display(pixels: np.ndarray, display, data) -> tuple[np.ndarray, np.ndarray | None]:
+    """``pixels`` of the ``data`` window placed in the ``display`` window (both
+    ``(x, y, width, height)``): (image, valid), valid None when no display pixel is empty.
+    Overscan (data outside the display window) is cut off."""
+    dx, dy, width, height = display
+    x, y, w, h = data
+    if (x, y, w, h) == (dx, dy, width, height):
+        return pixels, None
+    left, top = max(x, dx), max(y, dy)
+    right, bottom = min(x + w, dx + width), min(y + h, dy + height)
+    image = np.zeros((height, width, pixels.shape[2]), np.float32)
+    valid = np.zeros((height, width), np.float32)
+    if left < right and top < bottom:
+        image[top - dy : bottom - dy, left - dx : right - dx] = pixels[top - y : bottom - y, left - x : right - x]
+        valid[top - dy : bottom - dy, left - dx : right - dx] = 1.0
+    return image, (None if valid.all() else valid)
+
+
+def read_image(path: str | os.PathLike, level: int = 0, part: str | int | None = None):
+    """Read one image file as float32 (H, W, C) over its display window (see
+    :func:`read_file`; holes are zero).
+
+    Returns
+    -------
+    pixels, channel names, metadata dict, pixel type (``half``/``float``/``uint8``/``uint16``)
+    """
+    image = read_file(path, level, part)
+    header = image.header
+    return image.pixels, header.channels, header.metadata, header.pixel_type
+
+
+def read_header(path: str | os.PathLike, level: int = 0, part: str | int | None = None):
     """Read one image file's header without its pixels.
 
     Returns
     -------
-    width, height, channel names, metadata dict (of MIP level ``level``)
+    width, height (of the display window), channel names, metadata dict (of MIP level
+    ``level``), as :func:`read_image` gives them
     """
-    path = os.fspath(path)
-    if level == 0 and path.lower().endswith(".exr") and os.path.isfile(path):
-        plain = _read_plain_exr_header(path)  # OIIO's reading, without loading OIIO
-        if plain is not None:
-            return plain
-    with _open_input(path) as inp:
-        if level and not inp.seek_subimage(0, level):
-            raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
-        spec = inp.spec()
-        metadata = _tags_from_description({a.name: a.value for a in spec.extra_attribs})
-        return spec.width, spec.height, tuple(spec.channelnames), metadata
+    header = read_file_header(path, level, part)
+    return header.width, header.height, header.channels, header.metadata
 
 
-def read_pixel_type(path: str | os.PathLike) -> str:
+def read_pixel_type(path: str | os.PathLike, part: str | int | None = None) -> str:
     """Pixel type of one image file (``half``, ``float``, ``uint8``...), from its header only."""
-    with _open_input(os.fspath(path)) as inp:
-        return str(inp.spec().format)
+    return read_file_header(path, 0, part).pixel_type
 
 
 def _first_line(message: str) -> str:
@@ -160,75 +341,3 @@ def _tags_from_description(metadata: dict[str, Any]) -> dict[str, Any]:
     else:
         del metadata["ImageDescription"]
     return metadata
-
-
-# --- read-ahead ---------------------------------------------------------------------------------
-#
-# One slot: the command line reads ahead at most one input. The key holds the file's identity,
-# size and modification time, so a file replaced or rewritten in between is decoded again.
-
-_ahead_lock = threading.Lock()
-_ahead: dict[str, Any] = {}
-
-
-def _file_key(path: str, level: int):
-    try:
-        info = os.stat(path)
-    except OSError:
-        return None
-    if not stat.S_ISREG(info.st_mode):
-        return None
-    return (os.path.realpath(path), level, info.st_dev, info.st_ino, info.st_size, info.st_mtime_ns)
-
-
-def read_ahead(path: str | os.PathLike, level: int = 0) -> bool:
-    """Start decoding ``path`` on a helper thread; False when it is not a regular file.
-
-    The next :func:`read_image` of the same unchanged file waits for that thread and takes its
-    pixels instead of decoding again. A failed read-ahead is forgotten and the file is decoded
-    again, so errors read as they always do. The helper is a daemon thread, so that a command
-    that fails early (a usage error) does not wait for a large decode it will never use: the
-    CLI ends with ``os._exit``, which stops it; before an ordinary interpreter exit, call
-    :func:`join_read_ahead`, so that the image libraries are not torn down under it. It decodes on
-    one core, leaving the other to the imports it overlaps (on two cores, 0.57 s against 0.59 s
-    with OpenEXR's pool and 0.60 s without a read-ahead, for the e2e benchmark's convert).
-    """
-    path = os.fspath(path)
-    key = _file_key(path, level)
-    if key is None:
-        return False
-    box: dict[str, Any] = {}
-
-    def decode() -> None:
-        try:
-            box["result"] = _decode(path, level, threads=1)
-        except BaseException:  # noqa: BLE001 -- read_image decodes again and reports it
-            pass
-
-    thread = threading.Thread(target=decode, name="envconv-read-ahead", daemon=True)
-    with _ahead_lock:
-        _ahead.clear()
-        _ahead.update(key=key, thread=thread, box=box)
-    thread.start()
-    return True
-
-
-def join_read_ahead() -> None:
-    """Wait for a read-ahead still decoding (its result stays in the slot)."""
-    with _ahead_lock:
-        thread = _ahead.get("thread")
-    if thread is not None:
-        thread.join()
-
-
-def _take_read_ahead(path: str, level: int):
-    """The read-ahead result for ``path`` if it is this file's, else None. Empties the slot."""
-    with _ahead_lock:
-        if not _ahead:
-            return None
-        key, thread, box = _ahead["key"], _ahead["thread"], _ahead["box"]
-        if key != _file_key(path, level):
-            return None
-        _ahead.clear()
-    thread.join()
-    return box.get("result")

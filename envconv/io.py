@@ -1,4 +1,4 @@
-"""Reading and writing environment maps through OpenImageIO. The only module that touches files.
+"""Reading and writing environment maps: the file side of envconv.
 
 Formats: OpenEXR (half or float), Radiance HDR, TIFF, PNG and JPEG, chosen by the file
 extension. Pixels are always float32 in memory, in scene-linear Rec.709: :func:`read` and
@@ -9,44 +9,36 @@ px nx py ny pz nz, or front back. ``faces=`` names another program's skybox file
 orientations (Quake's ft bk lf rt up dn, Unity's Front …: :mod:`envconv.facesets`); reading
 finds the set from the files that exist when it is not given (:mod:`envconv.face_files`).
 
-Every output is written to a temporary file in the destination directory and renamed into place,
-so a failure never leaves a partial file, and inputs are never opened for writing.
+This module reads maps (files through :mod:`envconv.file_io`); writing lives in
+:mod:`envconv.io_write` (every output goes to a temporary file renamed into place, so a failure
+never leaves a partial file, and inputs are never opened for writing) and is re-exported here.
 """
 
 from __future__ import annotations
 
 import logging
 import os
-from dataclasses import replace
-from pathlib import Path
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
-from .detect import detect_layout
+from .detect import place_image
 from .envmap import EnvMap
 from .errors import ImageIOError, LayoutError
-from .exr_io import prefer_openexr_writer as _prefer_openexr_writer
-from .exr_io import read_plain_exr_header as _read_plain_exr_header
-from .exr_io import write_plain_exr as _write_plain_exr
 from .file_io import (
-    FORMATS,
-    _first_line,
-    _oiio,
+    FileHeader,
     _open_input,
-    read_header,
+    read_file,
+    read_file_header,
     read_image,
     read_pixel_type,
 )
+from .formats import FORMATS, WRITE_FORMATS, choose_pixel_type
+from .io_write import output_paths, write
 from .layouts import get_layout
-from .textures import CONTAINER_FORMATS
 
-__all__ = ["read", "write", "read_image", "read_header", "read_pixel_type", "choose_pixel_type",
-           "output_paths", "mip_levels", "FORMATS", "WRITE_FORMATS"]
-
-#: Every format :func:`write` writes: those OIIO reads and writes, and the DDS and KTX2
-#: containers envconv writes itself (:mod:`envconv.textures`).
-WRITE_FORMATS = {**FORMATS, **CONTAINER_FORMATS}
+__all__ = ["read", "read_unplaced", "write", "read_image", "read_header", "read_pixel_type",
+           "choose_pixel_type", "output_paths", "mip_levels", "FORMATS", "WRITE_FORMATS"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -54,7 +46,8 @@ log = logging.getLogger(__name__)
 _DROP_PREFIXES = ("oiio:", "envconv:", "openexr:", "tiff:", "png:", "jpeg:", "exif:", "hdr:")
 _DROP_NAMES = {"envmap", "compression", "planarconfig", "Orientation", "XResolution",
                "YResolution", "ResolutionUnit", "PixelAspectRatio", "screenWindowCenter",
-               "screenWindowWidth", "tile_width", "tile_height", "Software", "textureformat"}  # fmt: skip
+               "screenWindowWidth", "tile_width", "tile_height", "Software", "textureformat",
+               "name"}  # fmt: skip
 _KEEP_NAMES = {"oiio:ColorSpace"}
 
 
@@ -64,6 +57,7 @@ def read(
     level: int = 0,
     input_colorspace: str | None = None,
     ocio_config: str | os.PathLike | None = None,
+    part: str | None = None,
     faces: str | None = None,
 ) -> EnvMap:
     """Read an environment map, in scene-linear float32 (linear Rec.709).
@@ -81,64 +75,123 @@ def read(
         ``oiio:ColorSpace``, else linear for float/half and sRGB for 8/16-bit data.
     ocio_config : str or path, optional
         OpenColorIO config; default ``$OCIO``, else ``ocio://default``.
+    part : str, optional
+        Part of a multi-part file to read alone (its name, or its index); default every part
+        that is an image of the first part's windows (see :mod:`envconv.file_io`).
     faces : str, optional
         Face set of a ``{face}`` path of six skybox files (``quake``, ``unity-6sided``,
         ``threejs``, ``godot``, ``unreal``, ``envconv``; see :mod:`envconv.facesets`). Each
         file is turned into envconv's face, so the result is an ordinary ``cube-faces`` map.
         Default: found from the file names; several matching sets are a LayoutError.
 
-    Pixels are converted to linear Rec.709 by :func:`envconv.colorflow.to_working`. A
-    lat-long stored with edge-aligned samples (``oiio:sampleborder``, as OpenEXR envmaps
-    written by other tools) is resampled onto pixel centres
-    (:func:`envconv.colorflow.resample_edge_aligned`).
+    The map is the file's display window (:mod:`envconv.file_io`). Where the data window
+    leaves holes, every channel is 0 there, an alpha channel ``A`` (1 elsewhere) is added
+    when the file has none, and ``EnvMap.valid`` marks them. Pixels are converted to linear
+    Rec.709 by :func:`envconv.colorflow.to_working`. A lat-long stored with edge-aligned
+    samples (``oiio:sampleborder``, as OpenEXR envmaps written by other tools) is resampled
+    onto pixel centres (:func:`envconv.colorflow.resample_edge_aligned`).
     """
     from .colorflow import to_working
 
     path = os.fspath(path)
     if "{face}" in path:
-        return to_working(_read_multi(path, layout, level, faces), input_colorspace, ocio_config)
+        return to_working(_read_multi(path, layout, level, part, faces), input_colorspace,
+                          ocio_config)  # fmt: skip
     if faces is not None:
         raise LayoutError(f"a face set ({faces}) needs {{face}} in the path, e.g. sky_{{face}}.hdr")
     if layout is not None and get_layout(layout).multi_file:
         raise LayoutError(f"layout {layout} is stored as several files; put {{face}} in the path")
-    pixels, channels, metadata, pixel_type = read_image(path, level)
-    height, width = pixels.shape[:2]
-    guard = int(metadata.get("envconv:guard", 0) or 0)
-    if layout is None:
-        found, guard = detect_layout(width, height, metadata, pixels)
-    else:
-        found = get_layout(layout)
-        if metadata.get("envconv:layout") != found.name:
-            guard = 0
-    guard >>= level + int(metadata.get("envconv:level", 0) or 0)  # a level's guard is G >> k
-    found.size_from_image(width, height, guard)
+    image = read_file(path, level, part)
+    header = image.header
+    pixels, channels, parts = _with_alpha(image.pixels, header, image.valid)
+    metadata, valid = header.metadata, image.valid
+    found, guard, _ = place_image(header.width, header.height, metadata, layout, pixels, level)
     if found.name == "latlong" and metadata.get("oiio:sampleborder") and (
         "envconv:layout" not in metadata  # envconv's own files use pixel centres
     ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see colorflow.resample_edge_aligned
         from .colorflow import resample_edge_aligned
 
         pixels = resample_edge_aligned(pixels)
-    envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata), pixel_type)
+        valid = None if valid is None else resample_edge_aligned(valid[:, :, None])[:, :, 0]
+    envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata),
+                    header.pixel_type, valid=valid, parts=parts)  # fmt: skip
     return to_working(envmap, input_colorspace, ocio_config)
 
 
-def _read_multi(template: str, layout: str | None, level: int, faces=None) -> EnvMap:
-    from .face_files import read_face_files
+def _with_alpha(pixels: np.ndarray, header: FileHeader, valid: np.ndarray | None):
+    """(pixels, channels, parts) of a file's image, with an alpha channel ``A`` (the first
+    part's) holding ``valid`` when the image has holes and no alpha."""
+    channels = header.channels
+    parts = header.part_channels if len(header.chosen) > 1 else ()
+    if valid is None or any(_is_alpha(c) for c in channels):
+        return pixels, channels, parts
+    at = len(header.first.channels)
+    pixels = np.concatenate([pixels[:, :, :at], valid[:, :, None], pixels[:, :, at:]], axis=2)
+    if parts:
+        parts = ((parts[0][0], (*parts[0][1], "A")), *parts[1:])
+    return pixels, (*channels[:at], "A", *channels[at:]), parts
 
-    mosaic, channels, metadata, pixel_type, name = read_face_files(
-        template, layout, level, faces, read_image
-    )
-    found = get_layout(name)
-    guard = int(metadata.get("envconv:guard", 0) or 0)
-    if metadata.get("envconv:layout") != found.name:
-        guard = 0
-    guard >>= level + int(metadata.get("envconv:level", 0) or 0)
-    found.size_from_image(mosaic.shape[1], mosaic.shape[0], guard)
-    return EnvMap(mosaic, found, guard, channels, _content_metadata(metadata), pixel_type)
+
+def read_unplaced(path: str | os.PathLike, level: int = 0, part: str | None = None):
+    """(pixels, channels) of an image file as :func:`read` gives a map's, before any layout
+    is placed (display window; holes 0, with an ``A`` added): for images that fit none."""
+    image = read_file(os.fspath(path), level, part)
+    pixels, channels, _ = _with_alpha(image.pixels, image.header, image.valid)
+    return pixels, channels
 
 
-def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
-    """(width, height) of every MIP level of an image file (one entry if it has no chain).
+def _is_alpha(name: str) -> bool:
+    return name.upper() == "A" or name.lower() == "alpha"
+
+
+def read_header(path: str | os.PathLike, level: int = 0, part: str | None = None):
+    """Width, height, channels and metadata of the map :func:`read` would give (display
+    window; an ``A`` added where the data window leaves holes), from the header alone."""
+    header = read_file_header(path, level, part)
+    channels = header.channels
+    if header.holes and not any(_is_alpha(c) for c in channels):
+        at = len(header.first.channels)
+        channels = (*channels[:at], "A", *channels[at:])
+    return header.width, header.height, channels, header.metadata
+
+
+def _read_multi(template: str, layout: str | None, level: int, part: str | None,
+                faces=None) -> EnvMap:
+    """The parts of ``template`` side by side in face order, each cube face turned from its
+    face set's orientation into envconv's; holes (and an ``A``) as in :func:`read`."""
+    from .face_files import find_face_files
+
+    files = find_face_files(template, layout, faces)
+    found = get_layout(files.layout)
+    images = [read_file(path, level, part) for path in files.paths]
+    holes = any(image.valid is not None for image in images)
+    cells = []
+    for image in images:
+        valid = image.valid
+        if holes and valid is None:
+            valid = np.ones(image.pixels.shape[:2], np.float32)
+        cells.append((*_with_alpha(image.pixels, image.header, valid), valid))
+    if len({c[0].shape for c in cells}) != 1 or len({c[1] for c in cells}) != 1:
+        raise ImageIOError(f"the {found.name} parts of {template} differ in size or channels")
+    pixels = [c[0] for c in cells]
+    valids = [c[3] for c in cells]
+    if files.face_set is not None:
+        from .facesets import to_envconv
+
+        pixels = to_envconv(files.face_set, pixels)
+        if holes:
+            valids = [v[:, :, 0] for v in to_envconv(files.face_set, [v[:, :, None] for v in valids])]
+    header = images[0].header
+    mosaic = np.concatenate(pixels, axis=1)
+    valid = np.concatenate(valids, axis=1) if holes else None
+    _, guard, _ = place_image(mosaic.shape[1], mosaic.shape[0], header.metadata, found, level=level)
+    return EnvMap(mosaic, found, guard, cells[0][1], _content_metadata(header.metadata),
+                  header.pixel_type, valid=valid, parts=cells[0][2])  # fmt: skip
+
+
+def mip_levels(path: str | os.PathLike, part: str | None = None) -> list[tuple[int, int]]:
+    """(width, height) of the display window of every MIP level of an image file (of its
+    first part, or ``part``); one entry if it has no chain.
 
     Multi-file layouts (``{face}`` in the path) report the levels of their first file.
     """
@@ -147,20 +200,13 @@ def mip_levels(path: str | os.PathLike) -> list[tuple[int, int]]:
         from .face_files import find_face_files
 
         path = find_face_files(path).paths[0]
-    if path.lower().endswith(".exr") and os.path.isfile(path):
-        plain = _read_plain_exr_header(path)  # a plain file has no MIP levels
-        if plain is not None:
-            return [plain[:2]]
+    index = read_file_header(path, 0, part).chosen[0]
     with _open_input(path) as inp:
-        sizes = []
-        while inp.seek_subimage(0, len(sizes)):
+        sizes: list[tuple[int, int]] = []
+        while inp.seek_subimage(index, len(sizes)):
             spec = inp.spec()
-            sizes.append((spec.width, spec.height))
+            sizes.append((spec.full_width, spec.full_height))
         return sizes
-
-
-def _part_path(template: str, face: str) -> str:
-    return template.replace("{face}", face)
 
 
 def _content_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
@@ -169,361 +215,3 @@ def _content_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
         for k, v in metadata.items()
         if k in _KEEP_NAMES or (not k.startswith(_DROP_PREFIXES) and k not in _DROP_NAMES)
     }
-
-
-def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=None) -> list[str]:
-    """Files that writing a map of this layout to ``path`` produces.
-
-    With ``{level}`` in the path every one of ``levels`` mip levels is a file of its own
-    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``. ``faces``
-    names the files of a ``cube-faces`` map by a face set (:mod:`envconv.facesets`).
-    """
-    path = os.fspath(path)
-    if Path(path).suffix.lower() in CONTAINER_FORMATS:
-        if "{level}" in path or "{face}" in path:
-            raise LayoutError(f"{path}: a DDS or KTX2 file holds every face and level; "
-                              "drop {face} and {level} from the path")  # fmt: skip
-        return [path]
-    if "{level}" in path:
-        return [
-            p
-            for k in range(max(int(levels), 1))
-            for p in output_paths(envmap_layout, path.replace("{level}", str(k)), faces=faces)
-        ]
-    layout = get_layout(envmap_layout)
-    names = _face_names(layout, faces)
-    if layout.multi_file:
-        if "{face}" not in path:
-            raise LayoutError(
-                f"layout {layout.name} writes {len(layout.face_names)} files; "
-                "put {face} in the output path, e.g. sky_{face}.exr"
-            )
-        return [_part_path(path, name) for name in names]
-    if "{face}" in path:
-        raise LayoutError(
-            f"{{face}} in the output path needs a multi-file layout, not {layout.name}"
-        )
-    return [path]
-
-
-def _face_names(layout, faces) -> tuple[str, ...]:
-    """File-name parts of a layout's faces, or of a face set's files (cube-faces only)."""
-    if faces is None:
-        return layout.face_names
-    from .facesets import get_face_set
-
-    face_set = get_face_set(faces)
-    if layout.name != "cube-faces":
-        raise LayoutError(f"face set {face_set.name} applies to cube-faces, not {layout.name}")
-    return face_set.names
-
-
-def _format_of(path: str):
-    ext = Path(path).suffix.lower()
-    if ext not in WRITE_FORMATS:
-        known = " ".join(sorted(WRITE_FORMATS))
-        raise ImageIOError(
-            f"cannot write {path}: unknown extension {ext or '(none)'} (known: {known})"
-        )
-    return WRITE_FORMATS[ext]
-
-
-def choose_pixel_type(path: str, pixel_type: str, bit_depth: str | None) -> str:
-    """Pixel type written to ``path``: ``bit_depth``, else the source's if the format stores
-    it, else the format's default for float sources (``FORMATS``), else half (from uint8) or
-    float. Raises ImageIOError when the format cannot store ``bit_depth``."""
-    fmt, allowed, default, _ = _format_of(path)
-    if bit_depth is not None:
-        if bit_depth not in allowed:
-            raise ImageIOError(f"{fmt} cannot store {bit_depth}; it stores {', '.join(allowed)}")
-        return bit_depth
-    if pixel_type in allowed:
-        return pixel_type
-    if default is not None:
-        return default
-    return "half" if pixel_type == "uint8" else "float"
-
-
-def write(
-    envmap: EnvMap,
-    path: str | os.PathLike,
-    bit_depth: str | None = None,
-    compression: str | None = None,
-    output_colorspace: str | None = None,
-    dither: bool = True,
-    ocio_config: str | os.PathLike | None = None,
-    warnings: list[str] | None = None,
-    faces: str | None = None,
-) -> list[str]:
-    """Write ``envmap`` to ``path`` (one file, or one per face with ``{face}``).
-
-    The pixel type defaults to the source's where the format allows it (see ``FORMATS``).
-    Colour is converted from the map's ``oiio:ColorSpace`` to ``output_colorspace`` (default:
-    linear Rec.709 for float/half, sRGB for integer types), then clipped and quantized, 8-bit
-    with deterministic dither unless ``dither=False``; ``compression`` is checked against
-    :data:`envconv.colorflow.COMPRESSIONS` (see :func:`envconv.colorflow.encode_output`).
-    Clipping warnings are appended to ``warnings`` when it is a list, else logged.
-    Metadata is carried over, plus ``envconv:layout``, ``envconv:size``, ``envconv:guard``,
-    ``envconv:version`` and, for unguarded latlong and cube-exr EXRs, OpenEXR's ``envmap``.
-    A map with a mip chain (``envmap.levels``) is written as one MIP-mapped file (EXR: tiled
-    MIPMAP_LEVELS, ROUND_DOWN, every level down to 1 × 1; TIFF: one directory per level), or
-    as one file per level when the path holds ``{level}`` (any format; each file is tagged
-    ``envconv:level``). Alpha is written unassociated (never premultiplied). ``faces`` writes a
-    ``cube-faces`` map as another program's six skybox files (names and face turns of
-    :mod:`envconv.facesets`). Returns the paths written.
-    """
-    from .colorflow import encode_output
-
-    encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
-                            compression)  # fmt: skip
-    for message in encoded.warnings:
-        if warnings is None:
-            log.warning("%s", message)
-        else:
-            warnings.append(message)
-    levels, bit_depth, compression = encoded.levels, encoded.plan.pixel_type, encoded.plan.compression
-    envmap = replace(envmap, metadata=encoded.metadata, levels=None)
-    if encoded.plan.format in ("dds", "ktx2"):
-        return [_write_container(envmap, os.fspath(path), encoded.plan.format, levels)]
-    per_level = "{level}" in os.fspath(path)
-    paths = output_paths(envmap.layout, path, len(levels) if per_level else 1, faces=faces)
-    layout = envmap.layout
-    cells = [_cells(layout, level, faces) for level in levels]
-    names = list(_face_names(layout, faces)) if layout.multi_file else [None]
-    if per_level:
-        jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
-    else:
-        jobs = [([cell[f] for cell in cells], None, names[f]) for f in range(len(names))]
-    temps: list[tuple[str, str]] = []
-    try:
-        for target, (images, level, face) in zip(paths, jobs, strict=True):
-            temp = _temp_path(target)
-            temps.append((temp, target))
-            _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
-        for temp, target in temps:
-            os.replace(temp, target)
-    finally:
-        for temp, _ in temps:
-            if os.path.exists(temp):
-                os.remove(temp)
-    return paths
-
-
-def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarray]) -> str:
-    """Write a DDS or KTX2 file (:mod:`envconv.textures`) through a temporary file."""
-    from . import __version__
-    from .textures import encode_texture, texture_images
-
-    output_paths(envmap.layout, path)
-    images, cube = texture_images(envmap.layout, envmap.guard, levels, envmap.alpha_index)
-    extra = {"envconv:layout": envmap.layout.name}
-    if "envconv:roughness" in envmap.metadata:
-        extra["envconv:roughness"] = str(envmap.metadata["envconv:roughness"])
-    data = encode_texture(fmt, images, cube, envmap.alpha_index is None,
-                          f"envconv {__version__}", extra)  # fmt: skip
-    temp = _temp_path(path)
-    try:
-        with open(temp, "wb") as handle:
-            handle.write(data)
-        os.replace(temp, path)
-    except OSError as exc:
-        raise ImageIOError(f"cannot write {path}: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(temp):
-            os.remove(temp)
-    return path
-
-
-def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
-    """The per-file images of one level: the whole image, or each cell of a multi-file map
-    (turned into the face set's orientation when ``faces`` names one)."""
-    if not layout.multi_file:
-        return [pixels]
-    cw, ch = pixels.shape[1] // layout.columns, pixels.shape[0] // layout.rows
-    cells = [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
-    if faces is None:
-        return cells
-    from .facesets import from_envconv
-
-    return from_envconv(faces, cells)
-
-
-def _temp_path(target: str) -> str:
-    directory, name = os.path.split(os.path.abspath(target))
-    if not os.path.isdir(directory):
-        raise ImageIOError(f"cannot write {target}: directory {directory} does not exist")
-    stem, ext = os.path.splitext(name)
-    return os.path.join(directory, f".{stem}.envconv-{os.getpid()}.tmp{ext}")
-
-
-def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
-    """Write one file: ``images`` holds one image, or the levels of a MIP-mapped file."""
-    fmt = _format_of(target)[0]
-    if len(images) > 1:
-        full = max(images[0].shape[:2]).bit_length()
-        if fmt not in ("openexr", "tiff"):
-            raise ImageIOError(
-                f"cannot write {target}: {fmt} holds one image, not {len(images)} MIP levels; "
-                "put {level} in the output path for one file per level, e.g. sky_{level}.png"
-            )
-        if fmt == "openexr" and len(images) != full:
-            raise ImageIOError(
-                f"cannot write {target}: a MIP-mapped OpenEXR holds all {full} levels down to "
-                f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
-            )
-    levels = [_level_image(target, pixels, envmap, face, bit_depth, compression, level)
-              for pixels in images]  # fmt: skip
-    if fmt == "openexr" and len(levels) == 1:
-        if _prefer_openexr_writer(levels[0].attributes) and _write_plain_exr(temp, levels[0]):
-            return
-    oiio = _oiio()
-    out = oiio.ImageOutput.create(temp)
-    if out is None:
-        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
-    try:
-        for k, image in enumerate(levels):
-            spec = _image_spec(image)
-            mode = "Create"
-            if len(images) > 1:
-                _set_mip_attributes(spec, fmt)
-                mode = "Create" if k == 0 else "AppendMIPLevel" if fmt == "openexr" else "AppendSubimage"
-            if not out.open(temp, spec, mode):
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-            if not out.write_image(image.data):
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-    finally:
-        ok = out.close()
-        message = out.geterror()
-        del out  # release (and flush) the file before it is renamed into place
-        if not ok:
-            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
-
-
-def _int_tag(fmt: str, value: int):
-    """An integer tag as the format can keep it: PNG and JPEG keep only text attributes."""
-    return str(int(value)) if fmt in ("png", "jpeg") else int(value)
-
-
-def _set_mip_attributes(spec, fmt: str) -> None:
-    """Tiled MIP-map attributes: EXR MIPMAP_LEVELS with ROUND_DOWN, TIFF MIP directories."""
-    spec.tile_width = spec.tile_height = 64
-    if fmt == "openexr":
-        spec.attribute("openexr:levelmode", 1)  # MIPMAP_LEVELS
-        spec.attribute("openexr:roundingmode", 0)  # ROUND_DOWN
-    if not spec.get_string_attribute("textureformat"):
-        spec.attribute("textureformat", "Plain Texture")
-
-
-class LevelImage(NamedTuple):
-    """One image as it is to be written, before any image library is involved.
-
-    ``attributes`` are the (name, value) pairs its OIIO ImageSpec gets, in that order (see
-    :func:`_image_spec`); ``data`` is (H, W, C) float32 holding the values to store (codes,
-    half or float, from :func:`envconv.colorflow.encode_output`)."""
-
-    format: str
-    channels: tuple[str, ...]
-    pixel_type: str
-    alpha_index: int | None
-    attributes: list[tuple[str, Any]]
-    data: np.ndarray
-
-
-def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, level=None):
-    """The :class:`LevelImage` of one image of ``envmap`` written to ``target``."""
-    fmt, _, _, max_channels = _format_of(target)
-    pixel_type = choose_pixel_type(target, envmap.pixel_type, bit_depth)
-    channels = list(envmap.channels)
-    if max_channels is not None and len(channels) > max_channels:
-        log.warning(
-            "%s stores at most %d channels; writing %s",
-            fmt,
-            max_channels,
-            ",".join(channels[:max_channels]),
-        )
-        pixels = pixels[:, :, :max_channels]
-        channels = channels[:max_channels]
-    if fmt == "hdr" and len(channels) != 3:
-        pixels = np.repeat(pixels[:, :, :1], 3, axis=2)
-        channels = ["R", "G", "B"]
-    nch = pixels.shape[2]
-    alpha = envmap.alpha_index if envmap.alpha_index is not None and envmap.alpha_index < nch else None
-    attributes: list[tuple[str, Any]] = []
-    if alpha is not None and fmt in ("png", "tiff"):
-        # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
-        # mark it premultiplied (TIFF). envconv's alpha is a validity mask.
-        attributes.append(("oiio:UnassociatedAlpha", 1))
-    attributes.extend(envmap.metadata.items())
-    attributes.extend(_envconv_tags(envmap, fmt, face))
-    if compression is not None:
-        attributes.append(("compression", compression))
-    if level is not None:
-        attributes.append(("envconv:level", _int_tag(fmt, level)))
-    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, np.ascontiguousarray(pixels))
-
-
-def _image_spec(image: LevelImage):
-    """The OIIO ImageSpec of ``image``."""
-    oiio = _oiio()
-    height, width, nch = image.data.shape
-    spec = oiio.ImageSpec(width, height, nch, getattr(oiio, image.pixel_type.upper()))
-    spec.channelnames = image.channels
-    if image.alpha_index is not None:
-        spec.alpha_channel = image.alpha_index
-    for name, value in image.attributes:
-        _set_attribute(spec, name, value)
-    return spec
-
-
-# TIFF, Radiance HDR and JPEG keep only the attributes their format defines, so envconv's
-# layout tags also travel in ImageDescription, as "envconv:layout=NAME envconv:size=N ...".
-_DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
-
-
-def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str, Any]]:
-    """The attributes that tag a file as envconv's: layout, size, guard, version, face, and
-    OpenEXR's envmap (through OIIO's ``textureformat``)."""
-    from . import __version__
-
-    tags: list[tuple[str, Any]] = []
-    if fmt in _DESCRIPTION_FORMATS:
-        words = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
-        if face is not None:
-            words["face"] = face
-        text = " ".join(f"envconv:{k}={v}" for k, v in words.items())
-        kept = str(envmap.metadata.get("ImageDescription", "")).strip()
-        tags.append(("ImageDescription", f"{kept} {text}".strip()))
-
-    tags += [
-        ("envconv:layout", envmap.layout.name),
-        ("envconv:size", _int_tag(fmt, envmap.size)),
-        ("envconv:guard", _int_tag(fmt, envmap.guard)),
-        ("envconv:version", __version__),
-        ("Software", f"envconv {__version__}"),
-    ]
-    if face is not None:
-        tags.append(("envconv:face", face))
-    if fmt == "openexr" and envmap.guard == 0:
-        # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
-        # "envmap" string would be stored with the wrong type and make the file unreadable.
-        if envmap.layout.name == "latlong":
-            tags.append(("textureformat", "LatLong Environment"))
-        elif envmap.layout.name == "cube-exr":
-            tags.append(("textureformat", "CubeFace Environment"))
-    return tags
-
-
-def _set_attribute(spec, name: str, value: Any) -> None:
-    try:
-        if isinstance(value, (str, int, float)):
-            spec.attribute(name, value)
-        elif isinstance(value, (tuple, list)) and value:
-            oiio = _oiio()
-            kind = oiio.FLOAT if isinstance(value[0], float) else oiio.INT
-            spec.attribute(
-                name,
-                oiio.TypeDesc(f"{'float' if kind == oiio.FLOAT else 'int'}[{len(value)}]"),
-                value,
-            )
-    except Exception as exc:  # metadata that OIIO cannot express is dropped, not fatal
-        log.debug("dropped metadata %s: %s", name, exc)

@@ -16,19 +16,13 @@ import logging
 import numpy as np
 
 from .errors import ImageIOError
+from .formats import CONTAINER_FORMATS  # the table lives with the other formats'
 from .layouts import Layout
 from .layouts.base import FAMILY_CUBE_GL
 
 __all__ = ["CONTAINER_FORMATS", "cube_faces", "texture_images", "encode_texture"]
 
 log = logging.getLogger(__name__)
-
-#: Extension → (format name, pixel types, default for float sources, max channels), as
-#: ``envconv.io.FORMATS``; these formats are written, never read.
-CONTAINER_FORMATS = {
-    ".dds": ("dds", ("half", "float"), None, 4),
-    ".ktx2": ("ktx2", ("half", "float"), None, 4),
-}
 
 
 def cube_faces(layout: Layout, pixels: np.ndarray) -> list[np.ndarray]:

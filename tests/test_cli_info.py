@@ -62,18 +62,93 @@ def test_info_text_mode(tmp_path):
     assert "size: 8" in result.stdout
 
 
-def test_info_needs_from_for_an_untagged_square(tmp_path):
+def test_info_reports_an_untagged_square_as_unknown_until_from(tmp_path):
+    """1:1 could be sphere or angular: info still answers, with layout "unknown", the two
+    candidates and why; --from places it."""
     path = tmp_path / "square.exr"
     write_plain(path, np.ones((16, 16, 3)))
     result = run_cli(["info", path, "--json"])
-    assert result.exit_code != 0
-    assert len(stderr_lines(result)) == 1
-    assert "sphere" in result.stderr and "angular" in result.stderr
+    assert result.exit_code == 0, result.stderr
+    record = json.loads(result.stdout)
+    assert record["layout"] == "unknown" and record["candidates"] == ["sphere", "angular"]
+    assert "sphere or angular" in record["reason"] and "--from" in record["reason"]
+    assert (record["width"], record["height"], record["size"], record["mean_radiance"]) == (16, 16, None, None)
     result = run_cli(["info", path, "--json", "--from", "sphere"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
     assert record["layout"] == "sphere"
     np.testing.assert_allclose(record["mean_radiance"], [1.0, 1.0, 1.0], rtol=1e-6)
+
+
+def _oiio_file(path, pixels, names, pixel_type="half", display=None, data=None, attributes=None):
+    """An image written by OIIO directly, windows as (x, y, w, h)."""
+    import OpenImageIO as oiio
+
+    height, width, nch = pixels.shape
+    spec = oiio.ImageSpec(width, height, nch, getattr(oiio, pixel_type.upper()))
+    spec.channelnames = tuple(names)
+    if data is not None:
+        spec.x, spec.y = data[:2]
+        spec.full_x, spec.full_y, spec.full_width, spec.full_height = display
+    for name, value in (attributes or {}).items():
+        spec.attribute(name, value)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec) and out.write_image(pixels) and out.close()
+
+
+def test_info_describes_a_photograph_no_layout_fits(tmp_path):
+    """Like OpenEXR's sample GoldenGate.exr (1262x860 RGBA half): not an environment, yet
+    info gives its size, windows, channels and types, parts, colour space, range and
+    metadata, in JSON and as text, and says why it has no layout."""
+    rng = np.random.default_rng(2)
+    pixels = rng.uniform(0, 4, (860, 1262, 4)).astype(np.float16).astype(np.float32)
+    path = tmp_path / "GoldenGate.exr"
+    _oiio_file(path, pixels, "RGBA", attributes={"owner": "ILM", "oiio:ColorSpace": "lin_rec709_scene"})
+    result = run_cli(["info", path, "--json"])
+    assert result.exit_code == 0, result.stderr
+    record = json.loads(result.stdout)
+    assert record["layout"] == "unknown" and record["candidates"] == []
+    assert "1262x860" in record["reason"] and "matches no layout's aspect" in record["reason"]
+    assert (record["width"], record["height"]) == (1262, 860)
+    assert record["display_window"] == record["data_window"] == [0, 0, 1262, 860]
+    assert record["channels"] == ["R", "G", "B", "A"] and record["channel_types"] == ["half"] * 4
+    assert record["pixel_type"] == "half" and record["levels"] == [[1262, 860]]
+    assert [(p["name"], p["read"], p["channels"]) for p in record["parts"]] == [("", True, ["R", "G", "B", "A"])]
+    assert record["colorspace"] == "Linear Rec.709 (sRGB)"
+    np.testing.assert_allclose(record["min"], pixels.min((0, 1)))
+    np.testing.assert_allclose(record["max"], pixels.max((0, 1)))
+    assert record["nonfinite"] == 0 and record["metadata"]["Copyright"] == "ILM"
+    assert record["size"] is None and record["guard"] is None and record["mean_radiance"] is None
+    text = run_cli(["info", path])
+    assert text.exit_code == 0, text.stderr
+    assert "layout: unknown" in text.stdout and "width: 1262" in text.stdout
+    assert "matches no layout's aspect" in text.stdout
+
+
+def test_info_reports_both_windows_of_an_image_with_holes(tmp_path):
+    """Like OpenEXR's samples whose data window is smaller than the display window: the
+    image is the display window, the held pixels where the data window puts them, an A that
+    the file does not store (type None) says which those are."""
+    pixels = np.full((50, 60, 3), 2.0, np.float32)
+    path = tmp_path / "window.exr"
+    _oiio_file(path, pixels, "RGB", "float", display=(0, 0, 100, 80), data=(10, 5, 60, 50))
+    record = json.loads(run_cli(["info", path, "--json"]).stdout)
+    assert record["layout"] == "unknown"
+    assert (record["width"], record["height"]) == (100, 80)
+    assert record["display_window"] == [0, 0, 100, 80] and record["data_window"] == [10, 5, 60, 50]
+    assert record["channels"] == ["R", "G", "B", "A"]
+    assert record["channel_types"] == ["float", "float", "float", None]
+    assert record["min"] == [0.0, 0.0, 0.0, 0.0] and record["max"] == [2.0, 2.0, 2.0, 1.0]
+
+
+def test_info_with_a_from_the_size_does_not_fit_says_which_sizes_would(tmp_path):
+    path = tmp_path / "odd.exr"
+    write_plain(path, np.ones((81, 100, 3)))
+    result = run_cli(["info", path, "--from", "latlong"])
+    assert result.exit_code == 1
+    (line,) = stderr_lines(result)
+    assert "latlong (given by --from) needs width = 2 × height, and 100x81 is not" in line
+    assert "162x81" in line and "100x50" in line
 
 
 @pytest.mark.parametrize("content", [None, b"garbage bytes, not an EXR\n" * 8])

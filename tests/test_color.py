@@ -260,40 +260,13 @@ def test_bad_shape_is_usage_error(cfg):
         color.convert_colorspace(np.zeros((4, 4), np.float32), "srgb", "linear", cfg)
 
 
-def _ask_real(config, question):
-    kind, subject = question
-    if kind == "resolve":
-        return color.resolve_colorspace(config, subject)
-    if kind == "default":
-        assert subject == "linear Rec.709", "extend this test for a new kind of question"
-        return color.default_colorspace(config, "openexr", "float")
-    assert kind == "metadata_name"
-    return color.metadata_name(config, subject)
-
-
-def test_builtin_answers_are_ocios_own_for_the_installed_version(cfg):
-    """The table that spares a default conversion from loading OCIO must say exactly what the
-    installed OCIO's built-in config says; for a version the table does not know, envconv
-    loads the config instead."""
-    version = color._ocio_version()
-    answers = color._BUILTIN_ANSWERS.get(version or "")
-    builtin = color.builtin_config()
-    if not answers:
-        assert not isinstance(builtin, color.BuiltinConfig)
-        return
-    assert isinstance(builtin, color.BuiltinConfig)
-    import PyOpenColorIO
-
-    assert PyOpenColorIO.__version__ == version
-    for question, answer in answers.items():
-        assert _ask_real(cfg, question) == answer, question
-        assert _ask_real(builtin, question) == answer, question
-
-
-def test_builtin_config_loads_ocio_for_any_other_question():
-    """Questions outside the table, and every OCIO method, go to the real built-in config."""
-    lazy = color.BuiltinConfig({})
+def test_builtin_config_is_ocios_default_config():
+    """``builtin_config`` is OCIO's own ``ocio://default``, loaded once: OCIO answers."""
+    lazy = color.builtin_config()
+    assert lazy is color.builtin_config()
     assert lazy.getName().startswith("cg-config")
+    assert color.resolve_colorspace(lazy, "linear") == "Linear Rec.709 (sRGB)"
+    assert color.metadata_name(lazy, "linear") == "lin_rec709_scene"
     assert color.resolve_colorspace(lazy, "srgb") == SRGB
     assert color.default_colorspace(lazy, "png", "uint8") == SRGB
     px = image([0.5, 0.5, 0.5])

@@ -1,8 +1,8 @@
-"""A one-shot command's start-up: the read-ahead, lazy imports and cached-kernel loading.
+"""A one-shot command's start-up and end: lazy imports and the exit status.
 
 These are the parts of ``envconv convert``'s wall time that come before and around the work
-(see benchmarks/bench.py e2e for the figures). Each test checks what a user relies on: the
-same pixels whichever way they were decoded or loaded, and no heavy import where none is used.
+(see benchmarks/bench.py targets for the figures): no heavy import where none is used, and an
+ending like any Python program's.
 """
 
 from __future__ import annotations
@@ -10,15 +10,12 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-import threading
-from pathlib import Path
 
 import numpy as np
 import pytest
 from conftest import write_plain
 
 import envconv
-import envconv.file_io as file_io
 
 ENVCONV = os.path.join(os.path.dirname(sys.executable), "envconv")
 
@@ -29,117 +26,19 @@ def _image(path, seed, shape=(16, 32, 3)):
     return pixels
 
 
-@pytest.fixture
-def decodes(monkeypatch):
-    """Every decode of a file, with the name of the thread that ran it."""
-    calls = []
-    original = file_io._decode
-
-    def counting(path, level, threads=None):
-        calls.append((os.path.basename(path), threading.current_thread().name))
-        return original(path, level, threads)
-
-    monkeypatch.setattr(file_io, "_decode", counting)
-    yield calls
-    file_io._ahead.clear()
-
-
-def test_read_ahead_decodes_once_on_its_thread_and_gives_the_same_pixels(tmp_path, decodes):
-    pixels = _image(tmp_path / "a.exr", 1)
-    assert file_io.read_ahead(tmp_path / "a.exr")
-    got, channels, _, pixel_type = file_io.read_image(tmp_path / "a.exr")
-    np.testing.assert_array_equal(got, pixels)
-    assert channels == ("R", "G", "B") and pixel_type == "float"
-    assert decodes == [("a.exr", "envconv-read-ahead")]
-    # The slot is emptied: the next read decodes again, on the caller's thread.
-    file_io.read_image(tmp_path / "a.exr")
-    assert decodes[1] == ("a.exr", threading.current_thread().name)
-
-
-def test_read_ahead_of_a_file_rewritten_since_is_not_used(tmp_path, decodes):
-    path = tmp_path / "a.exr"
-    _image(path, 1)
-    assert file_io.read_ahead(path)
-    file_io._ahead["thread"].join()
-    newer = _image(path, 2)  # same size on disk, new content and modification time
-    os.utime(path, ns=(os.stat(path).st_atime_ns, os.stat(path).st_mtime_ns + 10**9))
-    got = file_io.read_image(path)[0]
-    np.testing.assert_array_equal(got, newer)
-    assert len(decodes) == 2
-
-
-def test_read_ahead_of_another_file_is_not_used(tmp_path, decodes):
-    _image(tmp_path / "a.exr", 1)
-    b = _image(tmp_path / "b.exr", 2)
-    assert file_io.read_ahead(tmp_path / "a.exr")
-    np.testing.assert_array_equal(file_io.read_image(tmp_path / "b.exr")[0], b)
-    assert [name for name, _ in decodes] == ["a.exr", "b.exr"]
-
-
-def test_read_ahead_of_a_damaged_file_reports_as_a_plain_read_does(tmp_path, decodes):
-    path = tmp_path / "bad.exr"
-    _image(path, 1)
-    path.write_bytes(path.read_bytes()[:200])  # a truncated file
-    with pytest.raises(envconv.ImageIOError) as plain:
-        file_io.read_image(path)
-    assert file_io.read_ahead(path)
-    with pytest.raises(envconv.ImageIOError) as ahead:
-        file_io.read_image(path)
-    assert str(ahead.value) == str(plain.value)
-
-
-def test_read_ahead_skips_what_is_not_a_regular_file(tmp_path):
-    assert not file_io.read_ahead(tmp_path / "missing.exr")
-    assert not file_io.read_ahead(tmp_path)
-    assert not file_io._ahead
-
-
-def test_cli_reads_ahead_the_input_it_guesses(tmp_path, monkeypatch):
-    """The first argument after the command that names an existing image file; never with
-    --dry-run or --help, never for commands that take no single input."""
-    import envconv.cli  # noqa: F401
-
-    main_module = sys.modules["envconv.cli.main"]
-    started = []
-
-    def read_ahead(path):
-        regular = os.path.isfile(path)  # as file_io.read_ahead decides
-        if regular:
-            started.append(path)
-        return regular
-
-    monkeypatch.setattr(file_io, "read_ahead", read_ahead)
-    _image(tmp_path / "in.exr", 1)
-    (tmp_path / "latlong").write_text("not an image")
-    inp, out = str(tmp_path / "in.exr"), str(tmp_path / "out.exr")
-    monkeypatch.chdir(tmp_path)
-    for args, expected in [
-        (["convert", inp, out, "--to", "latlong"], [inp]),
-        (["convert", "--to", "latlong", inp, out], [inp]),
-        (["info", inp, "--json"], [inp]),
-        (["read", inp, "resample", "--to", "sphere", "write", out], [inp]),
-        (["convert", inp, out, "--to", "latlong", "--dry-run"], []),
-        (["convert", "--help"], []),
-        (["batch", str(tmp_path), "resample", "--to", "latlong"], []),
-        (["convert", "missing.exr", out, "--to", "latlong"], []),
-    ]:
-        started.clear()
-        main_module._read_ahead_input(args)
-        assert started == expected, args
-
-
 def _run_python(code: str) -> str:
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert done.returncode == 0, done.stderr
     return done.stdout
 
 
-def test_importing_the_command_line_loads_neither_numba_nor_the_layouts():
-    """The entry point stays light until a command needs the kernels, so that the read-ahead
-    starts before numba is imported."""
+def test_importing_the_command_line_loads_neither_the_core_nor_the_layouts():
+    """The entry point stays light until a command needs the kernels (``layouts --help`` or a
+    usage error should not wait for them); nothing imports numba any more."""
     out = _run_python(
         "import sys, envconv, envconv.cli, envconv.file_io\n"
-        "print(sorted(m for m in ('numba', 'envconv.layouts', 'envconv.resample') if m in sys.modules))"
+        "print(sorted(m for m in ('numba', 'envconv._core', 'envconv.layouts', 'envconv.resample')"
+        " if m in sys.modules))"
     )
     assert out.strip() == "[]"
 
@@ -152,168 +51,20 @@ def test_lazy_package_attributes_resolve_and_unknown_names_fail():
         envconv.no_such_name  # noqa: B018
 
 
-def test_a_fresh_process_loads_cached_kernels_without_numbas_compiler_registries(tmp_path):
-    """numba's cache loader would import and install all of its typing and lowering registries
-    (numba.np.linalg among them) first; envconv's dispatchers skip that. Nor may a kernel make
-    arrays with np.empty or np.zeros (envconv.kernels.scratch instead), which would make loading
-    it import numba.np.arrayobj (0.05 s), nor typing a
-    plain ndarray argument import numpy.ma (numba's MaskedArray check, 0.013 s). The pixels a
-    fresh process computes from the cache must equal this process's, bit for bit, for the main
-    kernels: resampling (parallel), the rip-map and a mip chain."""
-    import analytic
-    import naive
-
-    source = envconv.EnvMap(naive.pixel_average("latlong", 64, analytic.radiance, samples=2), "latlong")
-    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
-    source = envconv.read(tmp_path / "src.exr")
-    jobs = {"cross": dict(to="cube-vcross", size=32), "mips": dict(to="latlong", size=32, mips=True),
-            "ball": dict(to="sphere", size=48, samples=3, filter="bicubic")}  # fmt: skip
-    expected = {}
-    for name, kwargs in jobs.items():  # also fills the cache for these signatures
-        result = envconv.convert(source, **kwargs)
-        expected[name] = result.levels if kwargs.get("mips") else [result.pixels]
-    code = (
-        "import sys, numpy as np, envconv\n"
-        f"source = envconv.read({str(tmp_path / 'src.exr')!r})\n"
-        f"for name, kwargs in {jobs!r}.items():\n"
-        "    r = envconv.convert(source, **kwargs)\n"
-        "    levels = r.levels if kwargs.get('mips') else [r.pixels]\n"
-        f"    np.savez({str(tmp_path)!r} + '/' + name + '.npz', *levels)\n"
-        "print([m for m in ('numba.np.linalg', 'numba.np.arrayobj', 'numpy.ma') if m in sys.modules])\n"
-    )
-    assert _run_python(code).strip() == "[]"
-    for name, levels in expected.items():
-        with np.load(tmp_path / f"{name}.npz") as saved:
-            assert len(saved.files) == len(levels)
-            for k, level in enumerate(levels):
-                np.testing.assert_array_equal(saved[f"arr_{k}"], level, err_msg=name)
-
-
-def test_a_default_exr_conversion_never_loads_opencolorio(tmp_path):
-    """Linear Rec.709 in and out needs no colour conversion, and OCIO's built-in config answers
-    its questions from envconv's table: a fresh process converting an EXR to an EXR must not
-    import PyOpenColorIO, and must write the same file as with that config loaded."""
-    source = envconv.EnvMap(np.random.default_rng(5).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
-    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
-    code = (
-        "import sys\n"
-        "from envconv.api import convert_file\n"
-        f"convert_file({str(tmp_path / 'src.exr')!r}, sys.argv[1], resample={{'to': 'cube-vcross', 'size': 16}},\n"
-        "             write={'ocio_config': sys.argv[2] or None})\n"
-        "print('PyOpenColorIO' in sys.modules)\n"
-    )
-
-    def run(output, config):
-        done = subprocess.run([sys.executable, "-c", code, str(output), config], capture_output=True, text=True)
-        assert done.returncode == 0, done.stderr
-        return done.stdout.strip()
-
-    assert run(tmp_path / "lazy.exr", "") == "False"
-    assert run(tmp_path / "loaded.exr", "ocio://default") == "True"
-    lazy, loaded = envconv.read(tmp_path / "lazy.exr"), envconv.read(tmp_path / "loaded.exr")
-    np.testing.assert_array_equal(lazy.pixels, loaded.pixels)
-    drop = {"DateTime", "capDate"}  # the time of writing
-    assert {k: v for k, v in lazy.metadata.items() if k not in drop} == {
-        k: v for k, v in loaded.metadata.items() if k not in drop
-    }
-    assert lazy.metadata["oiio:ColorSpace"] == "lin_rec709_scene"
-
-
-def test_a_function_loaded_from_the_cache_still_links_into_a_new_compilation():
-    """A cached library's linking bitcode is parsed only when something links it. A fresh
-    process loads a helper from the cache, calls it, then compiles a new function that calls
-    it: both must give this process's value, and the helper must have come from the cache."""
-    from envconv.kernels.geometry import FAMILY_CUBE_GL, density
-
-    expected = density(FAMILY_CUBE_GL, 2, 0.25, -0.5)  # compiles (or loads) and caches it
-    out = _run_python(
-        "import numba\n"
-        "from envconv.kernels.geometry import FAMILY_CUBE_GL, density\n"
-        "loaded = density(FAMILY_CUBE_GL, 2, 0.25, -0.5)\n"
-        "hits = sum(density._cache_hits.values())\n"
-        "@numba.njit\n"
-        "def twice(a, b):\n"
-        "    return 2.0 * density(FAMILY_CUBE_GL, 2, a, b)\n"
-        "print(repr(loaded), repr(twice(0.25, -0.5)), hits)\n"
-    )
-    loaded, linked, hits = out.split()
-    assert float(loaded) == expected and float(linked) == 2.0 * expected
-    assert int(hits) == 1
-
-
-def test_envconv_dispatchers_type_plain_arrays_as_numba_does():
-    """The typing that skips numba's MaskedArray check must give numba's own answer for every
-    layout, dtype, dimension and write flag, and leave anything else to numba."""
-    from numba.core.typing.typeof import Purpose, typeof
-
-    from envconv.kernels.ripmap import _fill_rips
-
-    base = np.arange(2 * 3 * 4 * 5, dtype=np.float64).reshape(2, 3, 4, 5)
-    readonly = np.ones((3, 4), np.float32)
-    readonly.flags.writeable = False
-    values = [base, base[:, ::2], np.asfortranarray(base), base[..., 0], base.astype(np.float32),
-              base.astype(np.int64), base > 3, np.float32(2.0).reshape(()), readonly,
-              np.empty((0, 3), np.uint16), np.zeros(5, np.complex64), 3, 2.5, (1, 2.0)]  # fmt: skip
-    for value in values:
-        assert _fill_rips.typeof_pyval(value) == typeof(value, Purpose.argument), repr(value)
-    masked = np.ma.masked_array(np.zeros(3))  # numba refuses it, and so must envconv
-    with pytest.raises(Exception, match="MaskedArray"):
-        _fill_rips.typeof_pyval(masked)
-
-
-def test_numbas_runtime_functions_load_from_envconvs_cache_and_a_bad_file_is_replaced(tmp_path):
-    """NRT's LLVM functions are compiled once and their machine code kept beside the kernels'
-    cache. A fresh process must load them (compiling is made to fail) and give the same pixels;
-    a damaged file must be compiled again and rewritten, never break a conversion."""
-    import pickle
-
-    from envconv.kernels.resample import resample_rows
-
-    source = envconv.EnvMap(np.random.default_rng(3).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
-    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
-    expected = envconv.convert(envconv.read(tmp_path / "src.exr"), "cube-vcross", size=16).pixels
-    convert = (
-        "import numpy as np, envconv\n"
-        f"r = envconv.convert(envconv.read({str(tmp_path / 'src.exr')!r}), 'cube-vcross', size=16)\n"
-        f"np.save({str(tmp_path / 'out.npy')!r}, r.pixels)\n"
-    )
-    cache_dir = resample_rows._cache._cache_path
-    saved = sorted(f for f in os.listdir(cache_dir) if f.startswith("nrt-") and f.endswith(".nbo"))
-    assert saved, "the first kernel load of this process should have saved NRT's machine code"
-    for name in saved:
-        (Path(cache_dir) / name).write_bytes(b"damaged")
-    _run_python(convert)
-    np.testing.assert_array_equal(np.load(tmp_path / "out.npy"), expected)
-    for name in saved:
-        assert pickle.loads((Path(cache_dir) / name).read_bytes())[1] == "object"
-    no_compiling = (
-        "from numba.core.runtime import nrtdynmod\n"
-        "def refuse(*args):\n"
-        "    raise AssertionError('NRT compiled although its machine code was cached')\n"
-        "nrtdynmod.compile_nrt_functions = nrtdynmod.create_nrt_module = refuse\n"
-    )
-    _run_python(no_compiling + convert)
-    np.testing.assert_array_equal(np.load(tmp_path / "out.npy"), expected)
-    assert not [f for f in os.listdir(cache_dir) if f.endswith(".tmp")]
-
-
-@pytest.mark.parametrize("full_exit", ["", "1"])
-def test_the_console_script_ends_alike_with_or_without_interpreter_teardown(tmp_path, full_exit):
-    """envconv ends with os._exit after the interpreter's own shutdown steps (threads, atexit
-    handlers, flushed streams); ENVCONV_FULL_EXIT=1 exits the ordinary way. Both must give the
-    same status, output and files."""
-    env = {**os.environ, "ENVCONV_FULL_EXIT": full_exit}
+def test_the_console_script_ends_with_the_status_and_output_of_the_command(tmp_path):
+    """The console script ends as any Python program does: status 0 with the paths written on
+    stdout, 1 and one line on stderr for bad input, 2 for bad usage, atexit handlers run."""
     source = tmp_path / "in.exr"
     _image(source, 3)
     ok = subprocess.run([ENVCONV, "convert", str(source), str(tmp_path / "out.exr"), "--to",
                          "cube-vcross", "--size", "8", "--from", "latlong"],
-                        capture_output=True, text=True, env=env)  # fmt: skip
+                        capture_output=True, text=True)  # fmt: skip
     assert ok.returncode == 0, ok.stderr
     assert ok.stdout.strip() == str(tmp_path / "out.exr") and (tmp_path / "out.exr").is_file()
     bad = subprocess.run([ENVCONV, "convert", str(tmp_path / "missing.exr"), str(tmp_path / "o.exr"),
-                          "--to", "latlong"], capture_output=True, text=True, env=env)  # fmt: skip
+                          "--to", "latlong"], capture_output=True, text=True)  # fmt: skip
     assert bad.returncode == 1 and len(bad.stderr.strip().splitlines()) == 1
-    usage = subprocess.run([ENVCONV, "convert", str(source)], capture_output=True, text=True, env=env)
+    usage = subprocess.run([ENVCONV, "convert", str(source)], capture_output=True, text=True)
     assert usage.returncode == 2
     code = (
         "import atexit, sys\n"
@@ -322,125 +73,7 @@ def test_the_console_script_ends_alike_with_or_without_interpreter_teardown(tmp_
         "from envconv.cli import main\n"
         "main()\n"
     )
-    handlers = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
+    handlers = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert handlers.returncode == 0
     assert handlers.stdout.splitlines()[0].startswith("latlong")
     assert handlers.stdout.splitlines()[-1] == "atexit ran"
-
-
-_NUMBA_YAML_PROBE = (
-    "import sys, envconv\n"
-    "envconv._COMMAND_LINE_PROCESS = sys.argv[1] == 'cli'\n"
-    "import envconv._jit\n"
-    "numba = envconv._jit.import_numba()\n"
-    "print('yaml' in sys.modules, numba.config.NUMBA_NUM_THREADS)\n"
-)
-
-
-def test_the_command_line_imports_numba_without_pyyaml_and_numba_still_reads_its_config(tmp_path):
-    """PyYAML serves only numba's ``.numba_config.yaml``. A command-line process imports numba
-    without it when the working directory has none; a library import is left alone. Either
-    way numba still reads such a file: at import when it is there, and at its next config
-    reload (as before every compilation) when it appears later."""
-    pytest.importorskip("yaml")
-    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}  # the file's turn
-
-    def probe(mode, cwd):
-        done = subprocess.run([sys.executable, "-c", _NUMBA_YAML_PROBE, mode], cwd=cwd, env=env,
-                              capture_output=True, text=True)  # fmt: skip
-        assert done.returncode == 0, done.stderr
-        return done.stdout.split()
-
-    loaded, threads = probe("library", tmp_path)
-    assert loaded == "True"
-    assert probe("cli", tmp_path) == ["False", threads]
-    if threads == "1":
-        pytest.skip("one core: a config file asking for one thread would change nothing")
-    (tmp_path / ".numba_config.yaml").write_text("num_threads: 1\n")
-    assert probe("cli", tmp_path) == ["True", "1"]
-
-    later = tmp_path / "later"
-    later.mkdir()
-    code = (
-        _NUMBA_YAML_PROBE
-        + "import pathlib\n"
-        + "pathlib.Path('.numba_config.yaml').write_text('num_threads: 1')\n"
-        + "numba.core.config.reload_config()\n"
-        + "print(numba.config.NUMBA_NUM_THREADS)\n"
-    )
-    done = subprocess.run([sys.executable, "-c", code, "cli"], cwd=later, env=env,
-                          capture_output=True, text=True)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.split() == ["False", threads, "1"]
-
-
-def test_exr_commands_never_load_openimageio(tmp_path):
-    """A plain RGB EXR in and out is read and written by the OpenEXR library alone, so neither
-    ``convert`` nor ``info`` imports OpenImageIO (0.035 s); the file written holds what
-    converting in this process gives, and ``info`` reports what it reports here."""
-    from envconv.exr_io import _oiio_reading_known
-
-    if not _oiio_reading_known():
-        pytest.skip("this OIIO version's reading is not known to envconv: OIIO reads every file")
-    source = envconv.EnvMap(np.random.default_rng(9).uniform(0, 9, (32, 64, 3)).astype(np.float32), "latlong")
-    envconv.write(source, tmp_path / "src.exr", bit_depth="float")
-    code = (
-        "import atexit, sys\n"
-        "from envconv.cli.main import main\n"
-        "atexit.register(lambda: print('OpenImageIO' in sys.modules))\n"
-        "sys.argv = ['envconv', *sys.argv[1:]]\n"
-        "main()\n"
-    )
-    done = subprocess.run([sys.executable, "-c", code, "convert", str(tmp_path / "src.exr"),
-                           str(tmp_path / "out.exr"), "--to", "cube-vcross", "--size", "8"],
-                          capture_output=True, text=True)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    assert done.stdout.split()[-1] == "False"
-    expected = envconv.convert(envconv.read(tmp_path / "src.exr"), to="cube-vcross", size=8)
-    written = envconv.read(tmp_path / "out.exr")
-    np.testing.assert_array_equal(written.pixels, expected.pixels)
-    assert written.layout.name == "cube-vcross"
-
-    done = subprocess.run([sys.executable, "-c", code, "info", str(tmp_path / "out.exr"), "--json"],
-                          capture_output=True, text=True)  # fmt: skip
-    assert done.returncode == 0, done.stderr
-    *report, loaded = done.stdout.splitlines()
-    assert loaded == "False"
-    import json
-
-    assert json.loads("\n".join(report)) == envconv.info.describe(str(tmp_path / "out.exr"))
-
-
-@pytest.mark.parametrize("variable", [None, "OPENIMAGEIO_THREADS"])
-def test_openexr_threads_follow_oiio_without_loading_it_unless_configured(variable):
-    """Without OIIO loaded and no OIIO variable set, OIIO would use every core: OpenEXR gets
-    as many threads without importing OIIO. A variable that sets OIIO's threads is obeyed."""
-    code = (
-        "import os, sys, OpenEXR\n"
-        "from envconv.exr_io import _set_openexr_threads\n"
-        "_set_openexr_threads('zip')\n"
-        "print(OpenEXR.global_thread_count(), 'OpenImageIO' in sys.modules)\n"
-    )
-    env = {k: v for k, v in os.environ.items() if not k.startswith("OPENIMAGEIO_")}
-    if variable:
-        env[variable] = "1"
-    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=env)
-    assert done.returncode == 0, done.stderr
-    threads, loaded = done.stdout.split()
-    if variable:
-        assert (threads, loaded) == ("0", "True")  # one thread: OpenEXR's caller does the work
-    else:
-        cores = os.cpu_count() or 1
-        assert (int(threads), loaded) == (cores if cores > 1 else 0, "False")
-
-
-def test_installed_versions_are_what_importlib_metadata_says():
-    """envconv reads numba's, OIIO's and OCIO's versions from their dist-info directories,
-    without importing importlib.metadata (0.02 s of a one-shot command)."""
-    from importlib import metadata
-
-    from envconv._versions import installed_version
-
-    for name in ("numba", "OpenImageIO", "opencolorio", "llvmlite", "numpy", "click", "OpenEXR"):
-        assert installed_version(name) == metadata.version(name), name
-    assert installed_version("no-such-distribution-here") is None

@@ -1,4 +1,4 @@
-"""``envconv info INPUT``: layout, size, channels, range and mean radiance."""
+"""``envconv info INPUT``: what an image file is, whether or not it is an environment map."""
 
 from __future__ import annotations
 
@@ -16,11 +16,14 @@ __all__ = ["info_command"]
 @click.argument("input_path", metavar="INPUT")
 @click.option("--from", "from_", type=layout_choice(), help="Input layout (default: detect).")
 @click.option("--level", type=click.IntRange(min=0), default=0, help="MIP level to read.")
+@click.option("--part", metavar="NAME", help="Part of a multi-part file to describe alone (name or index).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def info_command(input_path, from_, level, as_json):
-    """Describe INPUT: detected layout, size, channels, value range and mean radiance.
+def info_command(input_path, from_, level, part, as_json):
+    """Describe INPUT, any image: layout, size, windows, channels, parts, range, metadata.
 
-    The mean radiance is weighted by each pixel's solid angle over the valid region.
+    An image no layout fits is still described, with layout 'unknown' and the candidates
+    and reason. The mean radiance (of a map) is weighted by each pixel's solid angle over
+    the valid region.
 
     \b
     Example:
@@ -28,7 +31,7 @@ def info_command(input_path, from_, level, as_json):
     """
     from ..info import describe
 
-    record = describe(input_path, layout=from_, level=level)
+    record = describe(input_path, layout=from_, level=level, part=part)
     if as_json:
         click.echo(json.dumps(record, indent=2, default=str))
         return
@@ -37,5 +40,9 @@ def info_command(input_path, from_, level, as_json):
             click.echo(f"{key}:")
             for k, v in value.items():
                 click.echo(f"  {k}: {v}")
+        elif isinstance(value, list) and value and isinstance(value[0], dict):
+            click.echo(f"{key}:")
+            for item in value:
+                click.echo("  - " + ", ".join(f"{k}: {v}" for k, v in item.items()))
         else:
             click.echo(f"{key}: {value}")

@@ -13,11 +13,9 @@ for the traceback).
 
 from __future__ import annotations
 
-import atexit
 import logging
 import os
 import sys
-import threading
 
 import click
 
@@ -201,80 +199,10 @@ def compose_steps(results, verbose: int, threads: int | None) -> None:
         run_chain(steps)
 
 
-#: Commands whose input file is decoded ahead, while the rest of envconv is imported.
-READS_INPUT = ("convert", "info", "read", "sh")
-
-
-def _read_ahead_input(args: list[str]) -> None:
-    """Start decoding a one-shot command's input on a helper thread (see envconv.file_io).
-
-    Importing numpy, the layouts and the cached kernels takes about 0.1 s on one core, and the
-    image libraries decode without holding the GIL, so the decode runs meanwhile on another. Click has not
-    parsed the arguments yet: the input is guessed as the first argument after the command
-    that names an existing regular image file. A wrong guess only wastes the helper's work,
-    since the read-ahead is used only by a read of that very, unchanged file.
-    """
-    if not args or args[0] not in READS_INPUT or {"--dry-run", "--help", "-h"} & set(args):
-        return
-    from ..file_io import FORMATS, read_ahead
-
-    for arg in args[1:]:
-        if not arg.startswith("-") and os.path.splitext(arg)[1].lower() in FORMATS:
-            if read_ahead(arg):
-                return
-
-
-def _exit_code(code) -> int:
-    """The status ``sys.exit(code)`` gives: None is 0, a message is printed and gives 1."""
-    if code is None:
-        return 0
-    if isinstance(code, int):
-        return code
-    print(code, file=sys.stderr)
-    return 1
-
-
-def _finish(code: int) -> None:
-    """End the process as the interpreter would, but without tearing its modules down.
-
-    Interpreter shutdown frees every module object one by one; with numba, llvmlite and the
-    image libraries loaded that took 0.075 s of a 0.79 s one-shot convert. What anyone can
-    observe still happens, in the interpreter's own order: other threads finish (threading's
-    shutdown, which also stops executors), atexit handlers run (logging flushes, temporary
-    directories are removed), and stdout and stderr are flushed. Then ``os._exit``. Every output
-    file is closed and renamed into place before this point; a read-ahead still decoding (a
-    daemon thread, after an early error) is simply stopped. ``ENVCONV_FULL_EXIT=1`` (or a
-    Python without these hooks) exits the ordinary way, after waiting for the read-ahead.
-    """
-    shutdown = getattr(threading, "_shutdown", None)
-    run_exit_handlers = getattr(atexit, "_run_exitfuncs", None)
-    if os.environ.get("ENVCONV_FULL_EXIT") or shutdown is None or run_exit_handlers is None:
-        if "envconv.file_io" in sys.modules:  # a read-ahead is a daemon thread
-            sys.modules["envconv.file_io"].join_read_ahead()
-        sys.exit(code)
-    shutdown()
-    run_exit_handlers()
-    for stream in (sys.stdout, sys.stderr):
-        try:
-            stream.flush()
-        except (OSError, ValueError):  # a closed pipe: nothing more can reach it
-            pass
-    os._exit(code)
-
-
 def main() -> None:
     """Console-script entry point."""
-    import envconv
-
-    envconv._COMMAND_LINE_PROCESS = True
-    _read_ahead_input(sys.argv[1:])
-    try:
-        cli.main(prog_name="envconv", standalone_mode=True)
-    except SystemExit as exc:
-        _finish(_exit_code(exc.code))
-    _finish(0)
+    cli.main(prog_name="envconv", standalone_mode=True)
 
 
 if __name__ == "__main__":  # pragma: no cover
     main()
-    sys.exit(0)

@@ -85,6 +85,7 @@ _OCIO_CONFIG = ("ocio_config", click.option("--ocio-config", "ocio_config", meta
 READ = [
     ("layout", click.option("--from", "layout", type=layout_choice(), help="Input layout (default: detect from metadata or aspect).")),
     ("level", click.option("--level", type=click.IntRange(min=0), default=0, show_default=True, help="MIP level of the input to read.")),
+    ("part", click.option("--part", metavar="NAME", help="Part of a multi-part input to read alone, by name or index (default: every part of the first part's windows).")),
     ("input_colorspace", click.option("--input-colorspace", "input_colorspace", metavar="NAME", help="OCIO colour space of the input (default: its oiio:ColorSpace, else linear for float, sRGB for 8/16-bit).")),
     _OCIO_CONFIG,
 ]  # fmt: skip

@@ -1,0 +1,407 @@
+"""Writing environment maps through OpenImageIO: :func:`envconv.io.write` and its helpers.
+
+Every output is written to a temporary file in the destination directory and renamed into place,
+so a failure never leaves a partial file, and inputs are never opened for writing. Pixels are
+converted from the working space to the output's colour space, range and bit depth by
+:func:`envconv.colorflow.encode_output`.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import replace
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from .envmap import EnvMap
+from .errors import ImageIOError, LayoutError
+from .file_io import _first_line, _oiio
+from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
+from .layouts import get_layout
+
+__all__ = ["write", "output_paths", "LevelImage"]
+
+log = logging.getLogger(__name__)
+
+
+def _part_path(template: str, face: str) -> str:
+    return template.replace("{face}", face)
+
+
+def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=None) -> list[str]:
+    """Files that writing a map of this layout to ``path`` produces.
+
+    With ``{level}`` in the path every one of ``levels`` mip levels is a file of its own
+    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``. ``faces``
+    names the files of a ``cube-faces`` map by a face set (:mod:`envconv.facesets`). A DDS or
+    KTX2 file holds every face and level itself.
+    """
+    path = os.fspath(path)
+    if os.path.splitext(path)[1].lower() in CONTAINER_FORMATS:
+        if "{level}" in path or "{face}" in path:
+            raise LayoutError(f"{path}: a DDS or KTX2 file holds every face and level; "
+                              "drop {face} and {level} from the path")  # fmt: skip
+        return [path]
+    if "{level}" in path:
+        return [
+            p
+            for k in range(max(int(levels), 1))
+            for p in output_paths(envmap_layout, path.replace("{level}", str(k)), faces=faces)
+        ]
+    layout = get_layout(envmap_layout)
+    names = _face_names(layout, faces)
+    if layout.multi_file:
+        if "{face}" not in path:
+            raise LayoutError(
+                f"layout {layout.name} writes {len(layout.face_names)} files; "
+                "put {face} in the output path, e.g. sky_{face}.exr"
+            )
+        return [_part_path(path, name) for name in names]
+    if "{face}" in path:
+        raise LayoutError(
+            f"{{face}} in the output path needs a multi-file layout, not {layout.name}"
+        )
+    return [path]
+
+
+def _face_names(layout, faces) -> tuple[str, ...]:
+    """File-name parts of a layout's faces, or of a face set's files (cube-faces only)."""
+    if faces is None:
+        return layout.face_names
+    from .facesets import get_face_set
+
+    face_set = get_face_set(faces)
+    if layout.name != "cube-faces":
+        raise LayoutError(f"face set {face_set.name} applies to cube-faces, not {layout.name}")
+    return face_set.names
+
+
+def write(
+    envmap: EnvMap,
+    path: str | os.PathLike,
+    bit_depth: str | None = None,
+    compression: str | None = None,
+    output_colorspace: str | None = None,
+    dither: bool = True,
+    ocio_config: str | os.PathLike | None = None,
+    warnings: list[str] | None = None,
+    faces: str | None = None,
+) -> list[str]:
+    """Write ``envmap`` to ``path`` (one file, or one per face with ``{face}``).
+
+    The pixel type defaults to the source's where the format allows it (see ``FORMATS``).
+    Colour is converted from the map's ``oiio:ColorSpace`` to ``output_colorspace`` (default:
+    linear Rec.709 for float/half, sRGB for integer types), then clipped and quantized, 8-bit
+    with deterministic dither unless ``dither=False``; ``compression`` is checked against
+    :data:`envconv.colorflow.COMPRESSIONS` (see :func:`envconv.colorflow.encode_output`).
+    Clipping warnings are appended to ``warnings`` when it is a list, else logged.
+    Metadata is carried over, plus ``envconv:layout``, ``envconv:size``, ``envconv:guard``,
+    ``envconv:version`` and, for unguarded latlong and cube-exr EXRs, OpenEXR's ``envmap``.
+    A map with a mip chain (``envmap.levels``) is written as one MIP-mapped file (EXR: tiled
+    MIPMAP_LEVELS, ROUND_DOWN, every level down to 1 × 1; TIFF: one directory per level), or
+    as one file per level when the path holds ``{level}`` (any format; each file is tagged
+    ``envconv:level``). Alpha is written unassociated (never premultiplied). ``faces`` writes a
+    ``cube-faces`` map as another program's six skybox files (names and face turns of
+    :mod:`envconv.facesets`). A ``.dds`` or ``.ktx2`` path gets a texture container with every
+    level (:mod:`envconv.textures`). Returns the paths written.
+    """
+    from .colorflow import encode_output
+
+    _check_parts(envmap, os.fspath(path))
+    encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
+                            compression)  # fmt: skip
+    for message in encoded.warnings:
+        if warnings is None:
+            log.warning("%s", message)
+        else:
+            warnings.append(message)
+    levels, bit_depth, compression = encoded.levels, encoded.plan.pixel_type, encoded.plan.compression
+    envmap = replace(envmap, metadata=encoded.metadata, levels=None)
+    if encoded.plan.format in ("dds", "ktx2"):
+        return [_write_container(envmap, os.fspath(path), encoded.plan.format, levels)]
+    per_level = "{level}" in os.fspath(path)
+    paths = output_paths(envmap.layout, path, len(levels) if per_level else 1, faces=faces)
+    layout = envmap.layout
+    cells = [_cells(layout, level, faces) for level in levels]
+    names = list(_face_names(layout, faces)) if layout.multi_file else [None]
+    if per_level:
+        jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
+    else:
+        jobs = [([cell[f] for cell in cells], None, names[f]) for f in range(len(names))]
+    temps: list[tuple[str, str]] = []
+    try:
+        for target, (images, level, face) in zip(paths, jobs, strict=True):
+            temp = _temp_path(target)
+            temps.append((temp, target))
+            _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
+        for temp, target in temps:
+            os.replace(temp, target)
+    finally:
+        for temp, _ in temps:
+            if os.path.exists(temp):
+                os.remove(temp)
+    return paths
+
+
+def _check_parts(envmap: EnvMap, path: str) -> None:
+    """Refuse, before any work, what a multi-part map cannot be written as."""
+    if not envmap.parts:
+        return
+    fmt = format_of(path)[0]
+    names = ", ".join(name for name, _ in envmap.parts)
+    if fmt != "openexr":
+        raise ImageIOError(f"cannot write {path}: {fmt} holds one image, not the parts {names} "
+                           "of the input; pass --part NAME to read one, or write .exr")  # fmt: skip
+    if envmap.levels is not None and "{level}" not in path:
+        raise ImageIOError(f"cannot write {path}: OpenImageIO writes no MIP levels into a "
+                           "multi-part OpenEXR; put {level} in the path for one file per level, "
+                           "or pass --part NAME to read one part")  # fmt: skip
+
+
+def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarray]) -> str:
+    """Write a DDS or KTX2 file (:mod:`envconv.textures`) through a temporary file."""
+    from . import __version__
+    from .textures import encode_texture, texture_images
+
+    output_paths(envmap.layout, path)
+    images, cube = texture_images(envmap.layout, envmap.guard, levels, envmap.alpha_index)
+    extra = {"envconv:layout": envmap.layout.name}
+    if "envconv:roughness" in envmap.metadata:
+        extra["envconv:roughness"] = str(envmap.metadata["envconv:roughness"])
+    data = encode_texture(fmt, images, cube, envmap.alpha_index is None,
+                          f"envconv {__version__}", extra)  # fmt: skip
+    temp = _temp_path(path)
+    try:
+        with open(temp, "wb") as handle:
+            handle.write(data)
+        os.replace(temp, path)
+    except OSError as exc:
+        raise ImageIOError(f"cannot write {path}: {exc.strerror or exc}") from None
+    finally:
+        if os.path.exists(temp):
+            os.remove(temp)
+    return path
+
+
+def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
+    """The per-file images of one level: the whole image, or each cell of a multi-file map
+    (turned into the face set's orientation when ``faces`` names one)."""
+    if not layout.multi_file:
+        return [pixels]
+    cw, ch = pixels.shape[1] // layout.columns, pixels.shape[0] // layout.rows
+    cells = [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
+    if faces is None:
+        return cells
+    from .facesets import from_envconv
+
+    return from_envconv(faces, cells)
+
+
+def _temp_path(target: str) -> str:
+    directory, name = os.path.split(os.path.abspath(target))
+    if not os.path.isdir(directory):
+        raise ImageIOError(f"cannot write {target}: directory {directory} does not exist")
+    stem, ext = os.path.splitext(name)
+    return os.path.join(directory, f".{stem}.envconv-{os.getpid()}.tmp{ext}")
+
+
+def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
+    """Write one file: ``images`` holds one image, or the levels of a MIP-mapped file; a map
+    with parts is written as a multi-part OpenEXR file, one part per entry of ``parts``."""
+    fmt = format_of(target)[0]
+    if len(images) > 1:
+        full = max(images[0].shape[:2]).bit_length()
+        if fmt not in ("openexr", "tiff"):
+            raise ImageIOError(
+                f"cannot write {target}: {fmt} holds one image, not {len(images)} MIP levels; "
+                "put {level} in the path for one file per level, e.g. sky_{level}.png"
+            )
+        if fmt == "openexr" and len(images) != full:
+            raise ImageIOError(
+                f"cannot write {target}: a MIP-mapped OpenEXR holds all {full} levels down to "
+                f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
+            )
+    if envmap.parts:
+        writes = _part_writes(target, images[0], envmap, face, bit_depth, compression, level)
+    else:
+        writes = []
+        for k, pixels in enumerate(images):
+            image = _level_image(target, pixels, envmap, face, bit_depth, compression, level)
+            spec = _image_spec(image)
+            mode = "Create"
+            if len(images) > 1:
+                _set_mip_attributes(spec, fmt)
+                mode = "Create" if k == 0 else "AppendMIPLevel" if fmt == "openexr" else "AppendSubimage"
+            writes.append((spec, mode, image.data))
+    _run_writes(temp, target, writes)
+
+
+def _part_writes(target, pixels, envmap, face, bit_depth, compression, level):
+    """(spec, mode, data) of every part of a multi-part file: the first opens the file with
+    all the parts' specs, as OpenEXR needs them all in its header."""
+    writes, start = [], 0
+    for name, names in envmap.parts:
+        data = pixels[:, :, start : start + len(names)]
+        start += len(names)
+        image = _level_image(target, data, envmap, face, bit_depth, compression, level, names)
+        image.attributes.append(("name", name))
+        writes.append((_image_spec(image), "AppendSubimage", image.data))
+    specs = [spec for spec, _, _ in writes]
+    writes[0] = (specs, "Create", writes[0][2])
+    return writes
+
+
+def _run_writes(temp, target, writes) -> None:
+    """Open ``temp`` and write each (spec or list of specs, mode, data) in turn; one-line
+    errors naming ``target``."""
+    oiio = _oiio()
+    out = oiio.ImageOutput.create(temp)
+    if out is None:
+        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
+    try:
+        for spec, mode, data in writes:
+            opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
+            if not opened:
+                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+            if not out.write_image(data):
+                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+    finally:
+        ok = out.close()
+        message = out.geterror()
+        del out  # release (and flush) the file before it is renamed into place
+        if not ok:
+            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+
+
+def _int_tag(fmt: str, value: int):
+    """An integer tag as the format can keep it: PNG and JPEG keep only text attributes."""
+    return str(int(value)) if fmt in ("png", "jpeg") else int(value)
+
+
+def _set_mip_attributes(spec, fmt: str) -> None:
+    """Tiled MIP-map attributes: EXR MIPMAP_LEVELS with ROUND_DOWN, TIFF MIP directories."""
+    spec.tile_width = spec.tile_height = 64
+    if fmt == "openexr":
+        spec.attribute("openexr:levelmode", 1)  # MIPMAP_LEVELS
+        spec.attribute("openexr:roundingmode", 0)  # ROUND_DOWN
+    if not spec.get_string_attribute("textureformat"):
+        spec.attribute("textureformat", "Plain Texture")
+
+
+class LevelImage(NamedTuple):
+    """One image as it is to be written, before any image library is involved.
+
+    ``attributes`` are the (name, value) pairs its OIIO ImageSpec gets, in that order (see
+    :func:`_image_spec`); ``data`` is (H, W, C) float32 holding the values to store (codes,
+    half or float, from :func:`envconv.colorflow.encode_output`)."""
+
+    format: str
+    channels: tuple[str, ...]
+    pixel_type: str
+    alpha_index: int | None
+    attributes: list[tuple[str, Any]]
+    data: np.ndarray
+
+
+def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, level=None,
+                 channels=None):  # fmt: skip
+    """The :class:`LevelImage` of one image of ``envmap`` written to ``target`` (of one of
+    its parts when ``channels`` names that part's channels)."""
+    fmt, _, _, max_channels = format_of(target)
+    pixel_type = choose_pixel_type(target, envmap.pixel_type, bit_depth)
+    channels = list(envmap.channels if channels is None else channels)
+    if max_channels is not None and len(channels) > max_channels:
+        log.warning(
+            "%s stores at most %d channels; writing %s",
+            fmt,
+            max_channels,
+            ",".join(channels[:max_channels]),
+        )
+        pixels = pixels[:, :, :max_channels]
+        channels = channels[:max_channels]
+    if fmt == "hdr" and len(channels) != 3:
+        pixels = np.repeat(pixels[:, :, :1], 3, axis=2)
+        channels = ["R", "G", "B"]
+    nch = pixels.shape[2]
+    alpha = next((k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None)
+    attributes: list[tuple[str, Any]] = []
+    if alpha is not None and fmt in ("png", "tiff"):
+        # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
+        # mark it premultiplied (TIFF). envconv's alpha is a validity mask.
+        attributes.append(("oiio:UnassociatedAlpha", 1))
+    attributes.extend(envmap.metadata.items())
+    attributes.extend(_envconv_tags(envmap, fmt, face))
+    if compression is not None:
+        attributes.append(("compression", compression))
+    if level is not None:
+        attributes.append(("envconv:level", _int_tag(fmt, level)))
+    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, np.ascontiguousarray(pixels))
+
+
+def _image_spec(image: LevelImage):
+    """The OIIO ImageSpec of ``image``."""
+    oiio = _oiio()
+    height, width, nch = image.data.shape
+    spec = oiio.ImageSpec(width, height, nch, getattr(oiio, image.pixel_type.upper()))
+    spec.channelnames = image.channels
+    if image.alpha_index is not None:
+        spec.alpha_channel = image.alpha_index
+    for name, value in image.attributes:
+        _set_attribute(spec, name, value)
+    return spec
+
+
+# TIFF, Radiance HDR and JPEG keep only the attributes their format defines, so envconv's
+# layout tags also travel in ImageDescription, as "envconv:layout=NAME envconv:size=N ...".
+_DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
+
+
+def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str, Any]]:
+    """The attributes that tag a file as envconv's: layout, size, guard, version, face, and
+    OpenEXR's envmap (through OIIO's ``textureformat``)."""
+    from . import __version__
+
+    tags: list[tuple[str, Any]] = []
+    if fmt in _DESCRIPTION_FORMATS:
+        words = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
+        if face is not None:
+            words["face"] = face
+        text = " ".join(f"envconv:{k}={v}" for k, v in words.items())
+        kept = str(envmap.metadata.get("ImageDescription", "")).strip()
+        tags.append(("ImageDescription", f"{kept} {text}".strip()))
+
+    tags += [
+        ("envconv:layout", envmap.layout.name),
+        ("envconv:size", _int_tag(fmt, envmap.size)),
+        ("envconv:guard", _int_tag(fmt, envmap.guard)),
+        ("envconv:version", __version__),
+        ("Software", f"envconv {__version__}"),
+    ]
+    if face is not None:
+        tags.append(("envconv:face", face))
+    if fmt == "openexr" and envmap.guard == 0:
+        # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
+        # "envmap" string would be stored with the wrong type and make the file unreadable.
+        if envmap.layout.name == "latlong":
+            tags.append(("textureformat", "LatLong Environment"))
+        elif envmap.layout.name == "cube-exr":
+            tags.append(("textureformat", "CubeFace Environment"))
+    return tags
+
+
+def _set_attribute(spec, name: str, value: Any) -> None:
+    try:
+        if isinstance(value, (str, int, float)):
+            spec.attribute(name, value)
+        elif isinstance(value, (tuple, list)) and value:
+            oiio = _oiio()
+            kind = oiio.FLOAT if isinstance(value[0], float) else oiio.INT
+            spec.attribute(
+                name,
+                oiio.TypeDesc(f"{'float' if kind == oiio.FLOAT else 'int'}[{len(value)}]"),
+                value,
+            )
+    except Exception as exc:  # metadata that OIIO cannot express is dropped, not fatal
+        log.debug("dropped metadata %s: %s", name, exc)
