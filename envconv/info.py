@@ -9,7 +9,6 @@ was chosen.
 
 from __future__ import annotations
 
-import os
 from typing import Any
 
 import numpy as np
@@ -33,13 +32,9 @@ def _first_file(path: str, layout: str | None) -> str:
     """The file whose header stands for a (possibly ``{face}``) path."""
     if "{face}" not in path:
         return path
-    from .layouts import get_layout
+    from .face_files import find_face_files
 
-    names = get_layout(layout).face_names if layout else ("px", "front")
-    for name in names:
-        if os.path.exists(path.replace("{face}", name)):
-            return path.replace("{face}", name)
-    return path.replace("{face}", names[0])
+    return find_face_files(path, layout).paths[0]
 
 
 def _parts(header) -> list[dict[str, Any]]:

@@ -63,15 +63,16 @@ def test_info_text_mode(tmp_path):
 
 
 def test_info_reports_an_untagged_square_as_unknown_until_from(tmp_path):
-    """1:1 could be sphere or angular: info still answers, with layout "unknown", the two
-    candidates and why; --from places it."""
+    """1:1 could be sphere, angular or one of the octahedral squares: info still answers,
+    with layout "unknown", the candidates and why; --from places it."""
     path = tmp_path / "square.exr"
     write_plain(path, np.ones((16, 16, 3)))
     result = run_cli(["info", path, "--json"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
-    assert record["layout"] == "unknown" and record["candidates"] == ["sphere", "angular"]
-    assert "sphere or angular" in record["reason"] and "--from" in record["reason"]
+    assert record["layout"] == "unknown" and record["candidates"] == [
+        "sphere", "angular", "octahedral", "equal-area"]
+    assert "sphere, angular" in record["reason"] and "--from" in record["reason"]
     assert (record["width"], record["height"], record["size"], record["mean_radiance"]) == (16, 16, None, None)
     result = run_cli(["info", path, "--json", "--from", "sphere"])
     assert result.exit_code == 0, result.stderr
