@@ -203,12 +203,12 @@ def convert_level(
     coverage : (H_k, W_k) float32
         Fraction of each texel in the layout's valid region.
     """
-    from .resample import FILTERS, _check_guard, _check_samples, auto_samples, default_size
     from .rotation import parse_rotation, rotation_matrix
+    from .sampling import FILTERS, auto_samples, check_guard, check_samples, default_size
 
     to = get_layout(to)
     fill = guard == "fill"
-    guard_px = 0 if fill else _check_guard(guard)
+    guard_px = 0 if fill else check_guard(guard)
     if size is None:
         size = default_size(envmap, to)
     sizes = mip_sizes(to, size, guard_px, True)
@@ -216,7 +216,7 @@ def convert_level(
         raise UsageError(f"level must be between 0 and {len(sizes) - 1}, got {level}")
     (w0, h0), (wk, hk) = sizes[0], sizes[level]
     scale = (w0 / wk, h0 / hk)
-    n_samples = _check_samples(samples)
+    n_samples = check_samples(samples)
     if n_samples is None:
         n_samples = auto_samples(envmap, to, size, math.sqrt(scale[0] * scale[1]))
     rot = np.ascontiguousarray(rotation_matrix(*parse_rotation(rotate)).T)

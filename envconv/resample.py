@@ -47,48 +47,21 @@ from . import kernels
 from .conventions import apply_remap, environment_axes, resolve_convention
 from .envmap import EnvMap
 from .errors import LayoutError, UsageError
-from .geometry import horizon_pitch, kernel_geometry, pixel_pitch
+from .geometry import kernel_geometry, pixel_pitch
 from .layouts import Layout, get_layout
 from .rotation import parse_rotation, rotation_matrix
+from .sampling import (
+    FILTERS,
+    MAX_SAMPLES,
+    auto_samples,
+    check_guard,
+    check_samples,
+    default_size,
+)
 
 __all__ = ["convert", "default_size", "auto_samples", "source_rips", "FILTERS", "MAX_SAMPLES"]
 
 log = logging.getLogger(__name__)
-
-#: Reconstruction filters by name → kernel code.
-FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
-MAX_SAMPLES = 32
-
-
-def default_size(source: EnvMap, to: Layout | str, out_convention=None) -> int:
-    """Output N that keeps the source's horizon pitch (see module docstring), or the rule of
-    ``out_convention``'s tool: ``pbrt`` makes the square as wide as the lat-long would be."""
-    to = get_layout(to)
-    if resolve_convention(out_convention, to).size_rule == "latlong-width":
-        return 2 * default_size(source, "latlong")
-    n = source.size * horizon_pitch(to) / horizon_pitch(source.layout)
-    return max(1, int(round(n)))
-
-
-def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float = 1.0) -> int:
-    """Sub-samples per pixel edge for ``samples="auto"`` (see module docstring)."""
-    to = get_layout(to)
-    pitch_out = horizon_pitch(to) / size * level_scale
-    pitch_in = horizon_pitch(source.layout) / source.size
-    return int(min(max(round(pitch_out / pitch_in), 1), MAX_SAMPLES))
-
-
-def _check_samples(samples) -> int | None:
-    if samples is None or samples == "auto":
-        return None
-    try:
-        value = int(samples)
-    except (TypeError, ValueError):
-        raise UsageError(f"samples must be a positive integer or 'auto', got {samples!r}") from None
-    if not 1 <= value <= 64:
-        raise UsageError(f"samples must be between 1 and 64, got {value}")
-    return value
-
 
 def convert(
     envmap: EnvMap,
@@ -172,14 +145,14 @@ def convert(
             envmap, pixels=apply_remap(envmap.layout, envmap.pixels, envmap.guard, cin.remap)
         )
     fill = guard == "fill"
-    guard_px = 0 if fill else _check_guard(guard)
+    guard_px = 0 if fill else check_guard(guard)
     if filter not in FILTERS:
         raise UsageError(f"unknown filter {filter!r}; choose one of {', '.join(FILTERS)}")
     if size is None:
         size = default_size(envmap, to, cout)
     if not isinstance(size, (int, np.integer)) or size < 1:
         raise LayoutError(f"size must be a positive integer, got {size!r}")
-    n_samples = _check_samples(samples)
+    n_samples = check_samples(samples)
     if n_samples is None and mips:
         n_samples = auto_samples(envmap, to, size)
     yaw, pitch, roll = parse_rotation(rotate)
@@ -337,13 +310,3 @@ def rip_rows(width: int, height: int, to: Layout | str, size: int) -> int:
         return height
     from_pole = math.pi / 2 - math.acos(cos_limit) + pitch
     return min(height, int(math.ceil(from_pole / (math.pi / height))) + 3)
-
-
-def _check_guard(guard) -> int:
-    try:
-        value = int(guard)
-    except (TypeError, ValueError):
-        raise UsageError(f"guard must be a number of pixels or 'fill', got {guard!r}") from None
-    if value < 0 or (isinstance(guard, float) and not math.isclose(guard, value)):
-        raise UsageError(f"guard must be a non-negative integer or 'fill', got {guard!r}")
-    return value
