@@ -31,8 +31,7 @@ from .pipeline import (
     count_levels,
     path_variables,
 )  # fmt: skip
-from .resample import default_size
-from .sourcemap import convert_source
+from .resample import convert, default_size
 
 __all__ = ["Walk", "SourceHeader"]
 
@@ -122,7 +121,7 @@ class Walk:
         guard = kwargs.get("guard", 0)
         guard = 0 if guard == "fill" else int(guard)
         if self.executing:
-            env = convert_source(self.source, **kwargs)
+            env = convert(self.source, **kwargs)
             size = env.size
         else:
             env = None

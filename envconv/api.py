@@ -7,7 +7,7 @@ import os
 from typing import Any
 
 from . import io
-from .sourcemap import convert_source
+from .resample import convert
 
 __all__ = ["convert_file", "plan_convert", "route_face_sets"]
 
@@ -48,7 +48,7 @@ def convert_file(
             log.warning("%s", note)
     else:
         warnings.extend(notes)
-    result = convert_source(source, to, **resample)
+    result = convert(source, to, **resample)
     return io.write(result, output_path, **write, warnings=warnings)
 
 

@@ -134,6 +134,19 @@ def convert(
     >>> cube.pixels.shape
     (128, 96, 3)
     """
+    options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
+                   alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
+                   in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
+    if envmap.valid is not None or envmap.parts:
+        from .sourcemap import convert_with_holes
+
+        return convert_with_holes(envmap, to, _resample, **options)
+    return _resample(envmap, to, **options)
+
+
+def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, roughness,
+              irradiance, in_convention, out_convention, up, axes) -> EnvMap:
+    """:func:`convert` of a map without holes or parts."""
     to = get_layout(to)
     mips, ggx = _mip_filter(mips)
     cin = resolve_convention(in_convention, envmap.layout)

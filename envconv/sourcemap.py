@@ -1,8 +1,8 @@
 """Resampling a map as its file held it: holes left by the data window, and parts.
 
-:func:`convert_source` is :func:`envconv.resample.convert` for maps read from files, and every
-entry point that reads files resamples through it: :func:`envconv.api.convert_file` and the
-pipeline walker (so ``convert``, chains, graph files and batches alike).
+:func:`envconv.resample.convert` hands a map with holes or parts to :func:`convert_with_holes`,
+so every entry point (``envconv.convert``, ``convert``, chains, graph files and batches)
+resamples a map read from a file alike.
 
 Holes
     A map read from a file whose data window leaves part of its display window empty has
@@ -33,17 +33,16 @@ import numpy as np
 
 from .envmap import EnvMap
 
-__all__ = ["convert_source", "VALID_CHANNEL"]
+__all__ = ["convert_with_holes", "VALID_CHANNEL"]
 
 #: Name of the channel that carries ``EnvMap.valid`` through the resampler.
 VALID_CHANNEL = "envconv.valid"
 
 
-def convert_source(envmap: EnvMap, to, **kwargs) -> EnvMap:
-    """:func:`envconv.resample.convert` of ``envmap`` (same arguments), with its holes and
-    parts handled as the module docstring says."""
-    from .resample import convert
-
+def convert_with_holes(envmap: EnvMap, to, resample, **kwargs) -> EnvMap:
+    """``resample(envmap, to, **kwargs)`` (the resampler of :func:`envconv.resample.convert`),
+    with ``envmap``'s holes and parts handled as the module docstring says."""
+    convert = resample
     if envmap.valid is None:
         return _keep_parts(convert(envmap, to, **kwargs), envmap.parts)
     carrier = dataclasses.replace(

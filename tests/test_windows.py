@@ -214,7 +214,7 @@ def test_every_mip_level_treats_a_hole_as_a_hole(tmp_path):
     level above it (the chain's own rule, docs/masks-guards-mips.md)."""
     write_window(tmp_path / "flat.exr", np.full((13, 64, 3), 3.0, np.float32), (0, 0, 64, 32), (0, 0, 64, 13))
     env = envconv.read(tmp_path / "flat.exr")
-    result = envconv.sourcemap.convert_source(env, "latlong", size=16, mips=True)
+    result = envconv.convert(env, "latlong", size=16, mips=True)
     assert len(result.levels) == 6
     for k, level in enumerate(result.levels):
         held = level[:, :, 3] > 0
