@@ -109,9 +109,11 @@ def _run_watched(call, total: int) -> None:
     worker.start()
     while worker.is_alive():
         worker.join(0.2)
-        watcher(int(progress[0]), total)
+        if worker.is_alive():
+            watcher(int(progress[0]), total)
     if failure:
         raise failure[0]
+    watcher(int(progress[0]), total)  # the end, however fast the kernel was
 
 
 def _c(array, dtype) -> np.ndarray:

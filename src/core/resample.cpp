@@ -45,8 +45,7 @@ struct Job {
 // Per-band working memory.
 struct Scratch {
     std::vector<double> acc, tmp;
-    // One row of sub-samples across a tile: fx, source point and weight of each.
-    std::vector<double> fxs;
+    std::vector<double> fxs;                  // fx of every sub-sample column of a tile
     std::vector<double> tile_acc, tile_wsum;  // (kTile, C) and kTile
     explicit Scratch(int64_t nch)
         : acc(nch),
@@ -188,7 +187,6 @@ struct TapWindow {
     double x_scale, x_offset;
     int64_t level, level_start, level_width;
     int64_t bx0, by0, bx1, by1;
-    int64_t last_safe;  // flat texel index below which a 4-float load stays in the array
 };
 
 // Add w x the bilinear read of a tap that is not on the fast path: a rip-map level's wrapped
