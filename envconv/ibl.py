@@ -152,11 +152,7 @@ def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alp
         )  # fmt: skip
         faces = mosaic.reshape(p, 6, p, nch).transpose(1, 0, 2, 3)
         rotation = np.eye(3)
-    faces = np.ascontiguousarray(faces, np.float32)
-    count = sum(6 * (p >> k) ** 2 for k in range(p.bit_length()))
-    pyramid = np.empty(count * (8 + 4 * nch), np.float32)
-    kernels._core.ibl_pyramid(faces, pyramid, kernels.get_threads())
-    return pyramid, p, nch, rotation
+    return kernels.ibl_pyramid(faces), p, nch, rotation
 
 
 def _prefilter(pyr, to: Layout, size: int, guard: int, fill: bool, shape, scale, alpha, rotation):
@@ -167,11 +163,8 @@ def _prefilter(pyr, to: Layout, size: int, guard: int, fill: bool, shape, scale,
     samples = int(min(_MAX_SAMPLES, max(1, math.ceil(pitch / spacing))))
     tau = _TAU_NARROW if alpha <= _NARROW_ALPHA else _TAU_BROAD
     out = np.empty((height, width, nch), np.float32)
-    geo = kernels._geo(kernel_geometry(to, size, guard))
-    kernels._core.ibl_prefilter(
-        pyr[0], p, nch, *geo, float(scale[0]), float(scale[1]), float(alpha), samples,
-        np.ascontiguousarray(pyr[3], np.float64), bool(fill), tau, out, kernels.get_threads(),
-    )  # fmt: skip
+    kernels.ibl_prefilter(pyr[0], p, nch, kernel_geometry(to, size, guard), scale[0], scale[1],
+                          alpha, samples, pyr[3], fill, tau, out)  # fmt: skip
     log.debug("prefilter %dx%d alpha=%.4g S=%d tau=%.2g from a %d cube", width, height,
               alpha, samples, tau, p)  # fmt: skip
     return out

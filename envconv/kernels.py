@@ -27,6 +27,7 @@ __all__ = [
     "get_threads", "set_threads", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
+    "ibl_pyramid", "ibl_prefilter", "sh_project",
     "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
     "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES",
 ]  # fmt: skip
@@ -283,4 +284,35 @@ def level_reads(rip, start, level_width, points) -> np.ndarray:
     points = _c(points, np.float64).reshape(-1, 2)
     out = np.empty((points.shape[0], rip.shape[2]))
     _core.level_reads(rip, int(start), int(level_width), points, out)
+    return out
+
+
+def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
+    """The GGX prefilter's pyramid of a cube's six faces (6, p, p, C) float32, p a power of
+    two: every level's texel moments, packed as src/core/ibl.h describes."""
+    faces = _c(faces, np.float32)
+    p, nch = faces.shape[1], faces.shape[3]
+    count = sum(6 * (p >> k) ** 2 for k in range(p.bit_length()))
+    pyramid = np.empty(count * (8 + 4 * nch), np.float32)
+    _core.ibl_pyramid(faces, pyramid, _threads)
+    return pyramid
+
+
+def ibl_prefilter(pyramid, p, nch, geometry, scale_x, scale_y, alpha, samples, rot, fill, tau,
+                  out) -> None:  # fmt: skip
+    """Fill ``out`` (H, W, C) with the environment under the GGX lobe of roughness ``alpha``
+    (α = r²; α = 1 with the clamped cosine: irradiance / π), read from ``pyramid``
+    (:func:`ibl_pyramid` of a p-cube); ``tau`` bounds the expansion step (src/core/ibl.h)."""
+    _core.ibl_prefilter(
+        pyramid, int(p), int(nch), *_geo(geometry), float(scale_x), float(scale_y), float(alpha),
+        int(samples), _c(rot, np.float64), bool(fill), float(tau), out, _threads,
+    )  # fmt: skip
+
+
+def sh_project(pixels, geometry, samples: int, sign_x: float) -> np.ndarray:
+    """The 9 order-2 SH coefficients (9, C) of a map's pixels (R&H 2001, real orthonormal
+    basis), by S × S sub-samples per pixel; ``sign_x`` −1 projects in the cube frame."""
+    pixels = _c(pixels, np.float32)
+    out = np.zeros((9, pixels.shape[2]))
+    _core.sh_project(pixels, *_geo(geometry), int(samples), float(sign_x), out, _threads)
     return out

@@ -107,12 +107,9 @@ def project(envmap: EnvMap, frame: str = "world") -> np.ndarray:
     sign = {"world": 1.0, "cube": -1.0}.get(frame)
     if sign is None:
         raise UsageError(f"frame must be 'world' or 'cube', got {frame!r}")
-    out = np.zeros((9, envmap.pixels.shape[2]))
     samples = 2 if envmap.size < 512 else 1
-    geometry = kernels._geo(kernel_geometry(envmap.layout, envmap.size, envmap.guard))
-    kernels._core.sh_project(np.ascontiguousarray(envmap.pixels, np.float32), *geometry, samples,
-                             sign, out, kernels.get_threads())  # fmt: skip
-    return out
+    geometry = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
+    return kernels.sh_project(envmap.pixels, geometry, samples, sign)
 
 
 def irradiance_coefficients(coefficients: np.ndarray) -> np.ndarray:
