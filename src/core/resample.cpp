@@ -47,12 +47,17 @@ struct Scratch {
     std::vector<double> acc, tmp;
     std::vector<double> fxs;                  // fx of every sub-sample column of a tile
     std::vector<double> tile_acc, tile_wsum;  // (kTile, C) and kTile
+    // One row of sub-samples across a tile, mapped: source point, weight, the bilinear cell's
+    // top-left texel (as whole numbers) and its four weights.
+    std::vector<double> px, py, w, cx, cy, k00, k10, k01, k11;
     explicit Scratch(int64_t nch)
         : acc(nch),
           tmp(3 * nch, 0.0),
           fxs(size_t(kTile) * kMaxRowSamples),
           tile_acc(size_t(kTile) * nch),
-          tile_wsum(kTile) {}
+          tile_wsum(kTile),
+          px(fxs.size() + 1), py(px.size()), w(px.size()), cx(px.size()), cy(px.size()),
+          k00(px.size()), k10(px.size()), k01(px.size()), k11(px.size()) {}
 };
 
 // Write the normalised accumulator and the coverage of output pixel (i, j). NCH is the channel
@@ -201,6 +206,75 @@ void slow_tap(const Job& job, const TapWindow& win, int64_t c00, double px, doub
     }
 }
 
+// Floor of positions clamped to +-2^30 (NaN to -2^30): far outside every image, so such a
+// sample fails the fast path's bounds test and the slow path reads it from px, py.
+constexpr double kFarTexel = 1073741824.0;
+
+// Map one row of sub-samples (fx = fxs[c], quadratics q) into scratch: the arithmetic of the
+// scalar formulas, two samples at a time with SSE2 (each lane is the same IEEE operations in
+// the same order, so the results are the scalar ones, bit for bit).
+void map_row(const double* q, const double* fxs, int64_t columns, double x_scale,
+             double x_offset, Scratch& s) {
+    int64_t c = 0;
+#if defined(__SSE2__)
+    const __m128d q0 = _mm_set1_pd(q[0]), q1 = _mm_set1_pd(q[1]), q2 = _mm_set1_pd(q[2]);
+    const __m128d q3 = _mm_set1_pd(q[3]), q4 = _mm_set1_pd(q[4]), q5 = _mm_set1_pd(q[5]);
+    const __m128d q6 = _mm_set1_pd(q[6]), q7 = _mm_set1_pd(q[7]), q8 = _mm_set1_pd(q[8]);
+    const __m128d xs = _mm_set1_pd(x_scale), xo = _mm_set1_pd(x_offset);
+    const __m128d half = _mm_set1_pd(0.5), one = _mm_set1_pd(1.0);
+    const __m128d lo = _mm_set1_pd(-kFarTexel), hi = _mm_set1_pd(kFarTexel);
+    for (; c + 2 <= columns; c += 2) {
+        __m128d fx = _mm_loadu_pd(fxs + c);
+        __m128d x = _mm_add_pd(q0, _mm_mul_pd(fx, _mm_add_pd(q1, _mm_mul_pd(fx, q2))));
+        __m128d y = _mm_add_pd(q3, _mm_mul_pd(fx, _mm_add_pd(q4, _mm_mul_pd(fx, q5))));
+        __m128d w = _mm_add_pd(q6, _mm_mul_pd(fx, _mm_add_pd(q7, _mm_mul_pd(fx, q8))));
+        _mm_storeu_pd(&s.px[c], x);
+        _mm_storeu_pd(&s.py[c], y);
+        _mm_storeu_pd(&s.w[c], w);
+        __m128d tx = _mm_sub_pd(_mm_add_pd(_mm_mul_pd(x, xs), xo), half);
+        __m128d ty = _mm_sub_pd(y, half);
+        // max(v, lo) gives lo for a NaN v (SSE returns the second operand).
+        __m128d ctx = _mm_min_pd(_mm_max_pd(tx, lo), hi), cty = _mm_min_pd(_mm_max_pd(ty, lo), hi);
+        __m128d fx0 = _mm_cvtepi32_pd(_mm_cvttpd_epi32(ctx));
+        __m128d fy0 = _mm_cvtepi32_pd(_mm_cvttpd_epi32(cty));
+        fx0 = _mm_sub_pd(fx0, _mm_and_pd(_mm_cmplt_pd(ctx, fx0), one));
+        fy0 = _mm_sub_pd(fy0, _mm_and_pd(_mm_cmplt_pd(cty, fy0), one));
+        _mm_storeu_pd(&s.cx[c], fx0);
+        _mm_storeu_pd(&s.cy[c], fy0);
+        __m128d ux = _mm_sub_pd(tx, fx0), uy = _mm_sub_pd(ty, fy0);
+        __m128d vx = _mm_sub_pd(one, ux), vy = _mm_sub_pd(one, uy);
+        _mm_storeu_pd(&s.k00[c], _mm_mul_pd(_mm_mul_pd(w, vx), vy));
+        _mm_storeu_pd(&s.k10[c], _mm_mul_pd(_mm_mul_pd(w, ux), vy));
+        _mm_storeu_pd(&s.k01[c], _mm_mul_pd(_mm_mul_pd(w, vx), uy));
+        _mm_storeu_pd(&s.k11[c], _mm_mul_pd(_mm_mul_pd(w, ux), uy));
+    }
+#endif
+    for (; c < columns; ++c) {
+        double fx = fxs[c];
+        double x = q[0] + fx * (q[1] + fx * q[2]);
+        double y = q[3] + fx * (q[4] + fx * q[5]);
+        double w = q[6] + fx * (q[7] + fx * q[8]);
+        s.px[c] = x;
+        s.py[c] = y;
+        s.w[c] = w;
+        double tx = x * x_scale + x_offset - 0.5, ty = y - 0.5;
+        double ctx = std::min(std::max(tx, -kFarTexel), kFarTexel);
+        double cty = std::min(std::max(ty, -kFarTexel), kFarTexel);
+        if (!(ctx == ctx)) ctx = -kFarTexel;
+        if (!(cty == cty)) cty = -kFarTexel;
+        double fx0 = double(int32_t(ctx)), fy0 = double(int32_t(cty));
+        fx0 -= ctx < fx0 ? 1.0 : 0.0;
+        fy0 -= cty < fy0 ? 1.0 : 0.0;
+        s.cx[c] = fx0;
+        s.cy[c] = fy0;
+        double ux = tx - fx0, uy = ty - fy0;
+        s.k00[c] = w * (1.0 - ux) * (1.0 - uy);
+        s.k10[c] = w * ux * (1.0 - uy);
+        s.k01[c] = w * (1.0 - ux) * uy;
+        s.k11[c] = w * ux * uy;
+    }
+}
+
 // Add one row of sub-samples (q: the row's quadratics in fx) across a tile to the pixels'
 // accumulators acc (pixels, C) and weight sums. Fast taps of 3 or 4 channels blend 4 floats at
 // once and sum a pixel's row in float (at most 64 samples: within 4e-6 relative) before it
@@ -217,11 +291,10 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
     const int64_t bx0 = win.bx0, by0 = win.by0;
     const uint64_t span_x = job.fast_taps ? uint64_t(win.bx1 - win.bx0) : 0;
     const uint64_t span_y = job.fast_taps ? uint64_t(win.by1 - win.by0) : 0;
-    const double x_scale = win.x_scale, x_offset = win.x_offset;
     // A 4-float load at the last tap (texel flat + W + 1) must stay inside the array.
     const int64_t last_safe = image.height * iw - iw - 1 - (nch == 3 ? 1 : 0);
-    const double q0 = q[0], q1 = q[1], q2 = q[2], q3 = q[3], q4 = q[4], q5 = q[5];
-    const double q6 = q[6], q7 = q[7], q8 = q[8];
+    map_row(q, fxs, pixels * nx, win.x_scale, win.x_offset, scratch);
+    const Scratch& r = scratch;
     for (int64_t i = 0; i < pixels; ++i) {
         double* a = acc + i * nch;
         double ws = 0.0;
@@ -229,36 +302,29 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
         __m128 sum = _mm_setzero_ps();
 #endif
         for (int64_t c = i * nx; c < (i + 1) * nx; ++c) {
-            double fx = fxs[c];
-            double px = q0 + fx * (q1 + fx * q2);
-            double py = q3 + fx * (q4 + fx * q5);
-            double w = q6 + fx * (q7 + fx * q8);
-            ws += w;
-            double tx = px * x_scale + x_offset - 0.5, ty = py - 0.5;
-            int64_t ix = floor_index(tx), iy = floor_index(ty);
+            ws += r.w[c];
+            int64_t ix = int64_t(r.cx[c]), iy = int64_t(r.cy[c]);
             if (!(uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y)) {
-                slow_tap(job, win, c00, px, py, w, a, scratch);
+                slow_tap(job, win, c00, r.px[c], r.py[c], r.w[c], a, scratch);
                 continue;
             }
-            tx -= double(ix);
-            ty -= double(iy);
-            double k00 = w * (1.0 - tx) * (1.0 - ty), k10 = w * tx * (1.0 - ty);
-            double k01 = w * (1.0 - tx) * ty, k11 = w * tx * ty;
             int64_t flat = iy * iw + ix;
             const float* t0 = image.data + flat * nch;
             const float* t1 = t0 + iw * nch;
 #if defined(__SSE2__)
             if ((NCH == 3 || NCH == 4) && flat < last_safe) {
-                __m128 v = _mm_mul_ps(_mm_set1_ps(float(k00)), _mm_loadu_ps(t0));
-                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(k10)), _mm_loadu_ps(t0 + nch)));
-                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(k01)), _mm_loadu_ps(t1)));
-                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(k11)), _mm_loadu_ps(t1 + nch)));
+                __m128 v = _mm_mul_ps(_mm_set1_ps(float(r.k00[c])), _mm_loadu_ps(t0));
+                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k10[c])), _mm_loadu_ps(t0 + nch)));
+                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k01[c])), _mm_loadu_ps(t1)));
+                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k11[c])), _mm_loadu_ps(t1 + nch)));
                 sum = _mm_add_ps(sum, v);
                 continue;
             }
 #endif
-            for (int64_t ch = 0; ch < nch; ++ch)
-                a[ch] += k00 * t0[ch] + k10 * t0[nch + ch] + k01 * t1[ch] + k11 * t1[nch + ch];
+            for (int64_t ch = 0; ch < nch; ++ch) {
+                a[ch] += r.k00[c] * t0[ch] + r.k10[c] * t0[nch + ch] + r.k01[c] * t1[ch] +
+                         r.k11[c] * t1[nch + ch];
+            }
         }
 #if defined(__SSE2__)
         if (NCH == 3 || NCH == 4) {
