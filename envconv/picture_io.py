@@ -1,0 +1,47 @@
+"""Writing 8-bit pictures (previews, contact sheets): the file side of :mod:`envconv.preview`.
+
+A picture is display-referred uint8 RGB, already tone-mapped; it is written as is, with no
+colour conversion, to a temporary file that is then renamed into place.
+"""
+
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+from .errors import ImageIOError
+from .file_io import _first_line, _oiio
+from .io_write import _temp_path
+
+__all__ = ["write_picture"]
+
+
+def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
+    """Write ``pixels`` (H, W, 3 or 4) uint8 to ``path`` (PNG, JPEG, TIFF… by extension).
+
+    The file is tagged ``oiio:ColorSpace = srgb_display`` (the preview's display encoding).
+    Returns the path written. Raises :class:`~envconv.errors.ImageIOError` with a one-line
+    message when the file cannot be written.
+    """
+    target = os.fspath(path)
+    data = np.ascontiguousarray(pixels, dtype=np.uint8)
+    temp = _temp_path(target)
+    oiio = _oiio()
+    out = oiio.ImageOutput.create(target)
+    if out is None:
+        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
+    spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], "uint8")
+    spec.attribute("oiio:ColorSpace", "srgb_display")
+    try:
+        ok = out.open(temp, spec) and out.write_image(data)
+        message = out.geterror()
+        ok = out.close() and ok
+        del out
+        if not ok:
+            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+        os.replace(temp, target)
+    finally:
+        if os.path.exists(temp):
+            os.remove(temp)
+    return target
