@@ -31,12 +31,11 @@ def preview_command(input_path, output_path, layout, in_convention, exposure, vi
       envconv preview blender_sky.exr -o sheet.png --in-convention blender --exposure -1
     """
     from .. import io
-    from ..errors import UsageError
     from ..picture_io import write_picture
     from ..preview import contact_sheet
 
     if os.path.abspath(output_path) == os.path.abspath(input_path):
-        raise UsageError(f"-o {output_path} would overwrite the input")
+        raise click.UsageError(f"-o {output_path} would overwrite the input")
     envmap = io.read(input_path, layout=layout, input_colorspace=input_colorspace)
     sheet = contact_sheet(envmap, exposure, view, in_convention)
     click.echo(write_picture(sheet, output_path))
