@@ -1,4 +1,5 @@
-"""Writing 8-bit pictures (previews, contact sheets): the file side of :mod:`envconv.preview`.
+"""Writing 8-bit pictures and viewer pages: the file side of :mod:`envconv.preview` and
+:mod:`envconv.viewer`.
 
 A picture is display-referred uint8 RGB, already tone-mapped; it is written as is, with no
 colour conversion, to a temporary file that is then renamed into place.
@@ -14,7 +15,7 @@ from .errors import ImageIOError
 from .file_io import _first_line, _oiio
 from .io_write import _temp_path
 
-__all__ = ["write_picture"]
+__all__ = ["write_picture", "write_page"]
 
 
 def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
@@ -41,6 +42,25 @@ def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
         if not ok:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
         os.replace(temp, target)
+    finally:
+        if os.path.exists(temp):
+            os.remove(temp)
+    return target
+
+
+def write_page(text: str, path: str | os.PathLike) -> str:
+    """Write ``text`` (an HTML page) as UTF-8 to ``path`` through a temporary file.
+
+    Returns the path written; raises :class:`~envconv.errors.ImageIOError` on failure.
+    """
+    target = os.fspath(path)
+    temp = _temp_path(target)
+    try:
+        with open(temp, "w", encoding="utf-8") as out:
+            out.write(text)
+        os.replace(temp, target)
+    except OSError as exc:
+        raise ImageIOError(f"cannot write {target}: {exc.strerror or exc}") from exc
     finally:
         if os.path.exists(temp):
             os.remove(temp)

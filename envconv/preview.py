@@ -106,8 +106,9 @@ def tone_map(pixels, channels=None, exposure: float = 0.0, auto: bool = True,
 def working_map(envmap: EnvMap, in_convention=None) -> EnvMap:
     """The map as a lat-long of height :data:`WORK_HEIGHT` (or less), in envconv's frame."""
     from .resample import convert
+    from .sampling import default_size
 
-    size = min(WORK_HEIGHT, max(envmap.pixels.shape[:2]))
+    size = min(WORK_HEIGHT, default_size(envmap, "latlong"))
     return convert(envmap, "latlong", size=size, in_convention=in_convention)
 
 

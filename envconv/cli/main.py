@@ -30,10 +30,11 @@ __all__ = ["cli", "main", "EnvconvCommand", "COMMANDS"]
 COMMANDS = {
     "batch": "batch", "colorspace": "chain", "convert": "convert", "exposure": "chain",
     "info": "info", "layouts": "layouts", "pattern": "pattern", "preview": "preview", "read": "chain",
-    "resample": "chain", "rotate": "chain", "run": "run", "sh": "sh", "write": "chain",
+    "resample": "chain", "rotate": "chain", "run": "run", "sh": "sh", "view": "view",
+    "write": "chain",
 }  # fmt: skip
 #: Commands that run on their own and cannot be chained with others.
-STANDALONE = {"convert", "info", "layouts", "run", "pattern", "preview", "sh"}
+STANDALONE = {"convert", "info", "layouts", "run", "pattern", "preview", "sh", "view"}
 
 
 def _load_commands(names=None) -> None:
