@@ -206,3 +206,28 @@ def test_bad_input_is_one_line(tmp_path):
     same = tmp_path / "a.png"
     result = runner.invoke(cli, ["preview", str(same), "-o", str(same)])
     assert result.exit_code == 2
+
+
+def test_chain_write_takes_a_preview_with_path_variables(tmp_path):
+    import OpenImageIO as oiio
+
+    src = tmp_path / "sky.exr"
+    envconv.write(envconv.EnvMap(np.full((32, 64, 3), 0.02, np.float32), "latlong"), str(src))
+    result = CliRunner().invoke(cli, ["read", str(src), "resample", "--to", "cube-hcross", "--size",
+                                      "8", "write", str(tmp_path / "{stem}_cross.exr"), "--preview",
+                                      str(tmp_path / "{stem}_{layout}.png")])  # fmt: skip
+    assert result.exit_code == 0, result.output
+    picture = tmp_path / "sky_cube-hcross.png"
+    assert str(picture) in result.output.split()
+    pixels = oiio.ImageBuf(str(picture)).get_pixels(oiio.UINT8)
+    grey = tone_map(np.full((1, 1, 3), MID_GREY, np.float32), auto=False)[0, 0, 0]
+    assert pixels.shape == (24, 32, 3) and abs(int(pixels[12, 12, 0]) - int(grey)) <= 1
+
+
+def test_convert_preview_never_overwrites_the_output(tmp_path):
+    src = tmp_path / "in.exr"
+    envconv.write(envconv.EnvMap(np.ones((8, 16, 3), np.float32), "latlong"), str(src))
+    out = tmp_path / "out.png"
+    result = CliRunner().invoke(cli, ["convert", str(src), str(out), "--to", "latlong",
+                                      "--preview", str(out)])  # fmt: skip
+    assert result.exit_code != 0 and "--preview" in result.output and not out.exists()
