@@ -159,13 +159,30 @@ def diffuse_ball(work: EnvMap, size: int = 256) -> np.ndarray:
     return out
 
 
+def _range_and_nans(envmap: EnvMap) -> tuple[float, float, int]:
+    """(min, max) of the finite colour values and the NaN count of every channel, read in
+    bands of rows so a 16K map needs no full-size temporary."""
+    names = [c.upper() for c in envmap.channels] or ["R", "G", "B"]
+    cols = [k for k, c in enumerate(names) if c != "A"][:3] or [0]
+    lo, hi, nans = np.inf, -np.inf, 0
+    for start in range(0, envmap.pixels.shape[0], 256):
+        band = envmap.pixels[start : start + 256]
+        nans += int(np.count_nonzero(np.isnan(band)))
+        rgb = band[..., cols]
+        finite = np.isfinite(rgb)
+        values = rgb if finite.all() else rgb[finite]
+        if values.size:
+            lo, hi = min(lo, float(values.min())), max(hi, float(values.max()))
+    return (lo, hi, nans) if lo <= hi else (float("nan"), float("nan"), nans)
+
+
 def map_stats(envmap: EnvMap, work: EnvMap) -> dict:
-    """Layout, size, range and NaN count of ``envmap`` itself; mean radiance (per steradian,
-    solid-angle weighted) and the brightest direction from the working lat-long ``work``."""
+    """Layout, size, range (finite colour values) and NaN count (all channels) of ``envmap``
+    itself; mean radiance (per steradian, solid-angle weighted) and the brightest direction
+    (the brightest pixel's centre) from the working lat-long ``work``."""
     from .info import mean_radiance
 
-    rgb, _ = _rgb_alpha(envmap.pixels, envmap.channels)
-    finite = rgb[np.isfinite(rgb)]
+    lo, hi, nans = _range_and_nans(envmap)
     wrgb, _ = _rgb_alpha(work.pixels, work.channels)
     lum = np.nan_to_num(wrgb.astype(np.float64) @ _LUMA, nan=-1.0)
     row, col = np.unravel_index(np.argmax(lum), lum.shape)
@@ -174,9 +191,9 @@ def map_stats(envmap: EnvMap, work: EnvMap) -> dict:
         "layout": envmap.layout.name,
         "width": envmap.pixels.shape[1],
         "height": envmap.pixels.shape[0],
-        "min": float(finite.min()) if finite.size else float("nan"),
-        "max": float(finite.max()) if finite.size else float("nan"),
-        "nan": int(np.isnan(envmap.pixels).sum()),
+        "min": lo,
+        "max": hi,
+        "nan": nans,
         "mean": mean_radiance(EnvMap(wrgb, work.layout))[:3],
         "brightest": tuple(float(v) for v in dirs[row, col]),
     }
@@ -190,11 +207,17 @@ def _stats_line(s: dict) -> str:
 
 
 def _thumbnail(envmap: EnvMap, max_width: int) -> np.ndarray:
-    """The map's own pixels, box-averaged by an integer factor to at most ``max_width``."""
+    """The map's own pixels, box-averaged by an integer factor to at most ``max_width``
+    (in bands of rows, so a 16K map needs no full-size temporary)."""
     step = max(1, -(-envmap.pixels.shape[1] // max_width))
     h, w = (np.array(envmap.pixels.shape[:2]) // step) * step
-    px = envmap.pixels[:h, :w].astype(np.float32)
-    return px.reshape(h // step, step, w // step, step, -1).mean(axis=(1, 3))
+    band = step * max(1, 64 // step)
+    out = []
+    for start in range(0, h, band):
+        px = envmap.pixels[start : min(start + band, h), :w]
+        rows = px.shape[0] // step
+        out.append(px.reshape(rows, step, w // step, step, -1).mean(axis=(1, 3), dtype=np.float32))
+    return np.concatenate(out, axis=0)
 
 
 def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",

@@ -231,3 +231,21 @@ def test_convert_preview_never_overwrites_the_output(tmp_path):
     result = CliRunner().invoke(cli, ["convert", str(src), str(out), "--to", "latlong",
                                       "--preview", str(out)])  # fmt: skip
     assert result.exit_code != 0 and "--preview" in result.output and not out.exists()
+
+
+def test_stats_count_nans_and_find_the_brightest_direction():
+    from envconv.geometry import dir_to_uv
+    from envconv.preview import map_stats
+
+    px = np.full((256, 512, 3), 0.5, np.float32)
+    sun = np.array([0.6, 0.64, -0.48])  # a unit direction
+    u, v = dir_to_uv("latlong", sun, 256)
+    px[int(v * 256) - 2 : int(v * 256) + 2, int(u * 512) - 2 : int(u * 512) + 2] = 1000.0
+    px[10, 20:25, 1] = np.nan
+    px[11, 0] = -3.0
+    env = envconv.EnvMap(px, "latlong")
+    stats = map_stats(env, working_map(env))
+    assert (stats["nan"], stats["min"], stats["max"]) == (5, -3.0, 1000.0)
+    # the 4×4 block is centred within a pixel (0.7°) of the sun; the answer is a pixel centre
+    assert np.degrees(np.arccos(np.dot(stats["brightest"], sun))) < 2.5
+    assert (stats["layout"], stats["width"], stats["height"]) == ("latlong", 512, 256)
