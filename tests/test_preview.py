@@ -206,6 +206,12 @@ def test_bad_input_is_one_line(tmp_path):
     same = tmp_path / "a.png"
     result = runner.invoke(cli, ["preview", str(same), "-o", str(same)])
     assert result.exit_code == 2
+    envconv.write(render_pattern("cube-faces", 8), str(tmp_path / "f_{face}.exr"))
+    face = tmp_path / "f_ny.exr"
+    before = face.read_bytes()
+    for command in ("preview", "view"):
+        result = runner.invoke(cli, [command, str(tmp_path / "f_{face}.exr"), "-o", str(face)])
+        assert result.exit_code == 2 and face.read_bytes() == before, command
 
 
 def test_chain_write_takes_a_preview_with_path_variables(tmp_path):

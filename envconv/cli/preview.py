@@ -2,12 +2,10 @@
 
 from __future__ import annotations
 
-import os
-
 import click
 
 from .main import cli
-from .options import layout_choice
+from .options import layout_choice, refuse_overwrite
 
 __all__ = ["preview_command"]
 
@@ -34,8 +32,7 @@ def preview_command(input_path, output_path, layout, in_convention, exposure, vi
     from ..picture_io import write_picture
     from ..preview import contact_sheet
 
-    if os.path.abspath(output_path) == os.path.abspath(input_path):
-        raise click.UsageError(f"-o {output_path} would overwrite the input")
+    refuse_overwrite(input_path, output_path)
     envmap = io.read(input_path, layout=layout, input_colorspace=input_colorspace)
     sheet = contact_sheet(envmap, exposure, view, in_convention)
     click.echo(write_picture(sheet, output_path))

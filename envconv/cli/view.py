@@ -7,7 +7,7 @@ import os
 import click
 
 from .main import cli
-from .options import layout_choice
+from .options import layout_choice, refuse_overwrite
 
 __all__ = ["view_command"]
 
@@ -40,8 +40,7 @@ def view_command(input_path, output_path, open_page, layout, in_convention, inpu
     from ..viewer import build_page
 
     output_path = output_path or _default_output(input_path)
-    if os.path.abspath(output_path) == os.path.abspath(input_path):
-        raise click.UsageError(f"-o {output_path} would overwrite the input")
+    refuse_overwrite(input_path, output_path)
     envmap = io.read(input_path, layout=layout, input_colorspace=input_colorspace)
     page = build_page(envmap, os.path.basename(input_path), in_convention, cap)
     click.echo(write_page(page, output_path))
