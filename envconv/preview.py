@@ -266,12 +266,7 @@ def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
 def preview_picture(envmap: EnvMap, exposure: float = 0.0, view: str = "tone") -> np.ndarray:
     """(H, W, 3) uint8 tone-mapped picture of ``envmap`` in its own layout, full size.
 
-    Automatic exposure uses each pixel's solid angle as its weight where the layout gives one.
+    Automatic exposure weights each pixel by its solid angle (0 outside the valid region).
     """
-    try:
-        weights = pixel_solid_angles(envmap.layout, envmap.size, envmap.guard, samples=1)
-    except Exception:  # noqa: BLE001 - multi-file mosaics and guards: fall back to plain mean
-        weights = None
-    if weights is not None and weights.shape != envmap.pixels.shape[:2]:
-        weights = None
+    weights = pixel_solid_angles(envmap.layout, envmap.size, envmap.guard, samples=1)
     return tone_map(envmap.pixels, envmap.channels, exposure, True, view, weights)
