@@ -14,6 +14,7 @@ Run by hand and quote the figures; nothing here is a test.
                                             # venv and py360convert + OpenCV, interleaved
                                             # (see benchmarks/targets.py, or targets --help)
     python benchmarks/bench.py ibl          # GGX chain + irradiance, whole process, and per level
+    python benchmarks/bench.py preview      # contact sheet and viewer page of a 16K lat-long, in process
 
 The envconv measured is the one the running interpreter imports (run this with a venv's python
 in which envconv is installed); the first line printed names it. Kernel throughput counts output
@@ -250,6 +251,25 @@ def bench_ibl(runs: int = 5) -> None:
         print(f"ibl level {shape[1]}x{shape[0]} alpha {alpha:.4f}: {seconds * 1e3:.0f} ms")
 
 
+def bench_preview(repeats: int = 3) -> None:
+    """Contact sheet and viewer page of an in-memory 16K lat-long (16384x8192), in process.
+
+    Equivalent commands: envconv preview latlong-16k.exr -o sheet.png; envconv view latlong-16k.exr
+    (reading the file comes on top)."""
+    from envconv.preview import contact_sheet
+    from envconv.viewer import build_page
+
+    src = _latlong(8192)
+    for name, make in (("contact sheet", contact_sheet), ("viewer page", build_page)):
+        times = []
+        for _ in range(repeats):
+            start = time.perf_counter()
+            make(src)
+            times.append(time.perf_counter() - start)
+        print(f"preview 16384x8192 lat-long, {name}: median {statistics.median(times):.2f} s, "
+              f"best {min(times):.2f} s over {repeats} runs")  # fmt: skip
+
+
 def main(argv: list[str]) -> None:
     which = argv[1:] or ["kernel", "e2e", "batch", "mips"]
     if which[0] in ("-h", "--help"):
@@ -266,7 +286,7 @@ def main(argv: list[str]) -> None:
             raise SystemExit("usage: python benchmarks/bench.py versus OTHER_CHECKOUT")
         bench_versus(which[1])
         return
-    unknown = set(which) - {"kernel", "e2e", "batch", "mips"}
+    unknown = set(which) - {"kernel", "e2e", "batch", "mips", "ibl", "preview"}
     if unknown:
         raise SystemExit(f"unknown benchmark {', '.join(sorted(unknown))}; see --help")
     if "kernel" in which:
@@ -279,6 +299,8 @@ def main(argv: list[str]) -> None:
         bench_mips()
     if "ibl" in which:
         bench_ibl()
+    if "preview" in which:
+        bench_preview()
 
 
 if __name__ == "__main__":

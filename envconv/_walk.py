@@ -149,12 +149,17 @@ class Walk:
                      "layout": record.layout, "size": record.size}  # fmt: skip
         path = step.target(variables)
         files = _output_paths(record.layout, path, record.levels, step.options.get("faces"))
+        preview = step.target(variables, "preview") if step.params.get("preview") else None
         if self.executing:
             if step.params["makedirs"]:
                 for directory in {os.path.dirname(os.path.abspath(f)) for f in files}:
                     os.makedirs(directory, exist_ok=True)
             files = io.write(env, path, **step.options)
+            if preview is not None:
+                files.append(_write_preview(env, preview))
             log.info("wrote %s", ", ".join(files))
+        elif preview is not None:
+            files = [*files, preview]
         self.written.extend(files)
         record.files.extend(files)
         self.current_written = True
@@ -166,6 +171,14 @@ class Walk:
                         envmap=src if (self.keep and self.executing) else None)  # fmt: skip
         self.outputs.append(record)
         self.current, self.current_written = (record, src if self.executing else None), False
+
+
+def _write_preview(env, path: str) -> str:
+    """A tone-mapped 8-bit picture of ``env`` at ``path`` (a write step's ``preview``)."""
+    from .picture_io import write_picture
+    from .preview import preview_picture
+
+    return write_picture(preview_picture(env), path)
 
 
 def _output_paths(layout: str, path: str, levels: int, faces=None) -> list[str]:

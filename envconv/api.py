@@ -7,6 +7,7 @@ import os
 from typing import Any
 
 from . import io
+from .errors import UsageError
 from .resample import convert
 
 __all__ = ["convert_file", "plan_convert", "route_face_sets"]
@@ -22,8 +23,12 @@ def convert_file(
     write: dict[str, Any] | None = None,
     color: dict[str, Any] | None = None,
     warnings: list[str] | None = None,
+    preview: str | os.PathLike | None = None,
 ) -> list[str]:
     """Read ``input_path``, resample, write ``output_path``; return the paths written.
+
+    ``preview``: also write a tone-mapped 8-bit picture of the result there (automatic
+    exposure, ACES SDR view: :func:`envconv.preview.preview_picture`); it is listed last.
 
     ``read``, ``resample`` and ``write`` are keyword arguments for :func:`envconv.io.read`,
     :func:`envconv.resample.convert` and :func:`envconv.io.write`; ``color`` for
@@ -38,6 +43,9 @@ def convert_file(
     route_face_sets(input_path, read, resample, write)
     to = resample.pop("to")
     io.output_paths(to, output_path, faces=write.get("faces"))
+    if preview is not None and os.path.abspath(preview) in (os.path.abspath(output_path),
+                                                            os.path.abspath(input_path)):  # fmt: skip
+        raise UsageError(f"--preview {preview} would overwrite the input or the output")
     # Fail fast on a bad --bit-depth, --compression or --output-colorspace, before reading.
     plan_output(output_path, "float", {}, write.get("output_colorspace"), write.get("bit_depth"),
                 write.get("ocio_config"), write.get("compression"))  # fmt: skip
@@ -49,7 +57,13 @@ def convert_file(
     else:
         warnings.extend(notes)
     result = convert(source, to, **resample)
-    return io.write(result, output_path, **write, warnings=warnings)
+    paths = io.write(result, output_path, **write, warnings=warnings)
+    if preview is not None:
+        from .picture_io import write_picture
+        from .preview import preview_picture
+
+        paths.append(write_picture(preview_picture(result), preview))
+    return paths
 
 
 def plan_convert(

@@ -46,6 +46,8 @@ __all__ = [
     "colorspace_from_metadata",
     "metadata_name",
     "convert_colorspace",
+    "display_view",
+    "VIEWS",
 ]
 
 log = logging.getLogger(__name__)
@@ -347,3 +349,45 @@ def convert_colorspace(pixels: np.ndarray, src: str, dst: str, config: Any) -> n
     out = arr.copy()
     out[..., sl] = rgb if arr.shape[2] >= 3 else rgb.mean(axis=2, keepdims=True)
     return out
+
+
+#: Preview views by friendly name: ``"tone"`` is the config's default view of its default
+#: display (ACES 2.0 SDR 100 nits in the built-in config), ``"srgb"`` its un-tone-mapped view.
+VIEWS = ("tone", "srgb")
+
+
+def display_view(rgb: np.ndarray, view: str = "tone", config: Any = None) -> np.ndarray:
+    """Scene-linear Rec.709 RGB to display code values through an OCIO display/view transform.
+
+    Parameters
+    ----------
+    rgb : ndarray, shape (..., 3)
+        Scene-linear Rec.709 (``lin_rec709``) values; exposure already applied.
+    view : {"tone", "srgb"} or str
+        ``"tone"``: the config's default view of its default display (in the built-in config,
+        ``sRGB - Display`` / ``ACES 2.0 - SDR 100 nits (Rec.709)``); ``"srgb"``: the
+        ``Un-tone-mapped`` view of that display; any other string is a view name of it.
+    config : PyOpenColorIO.Config, optional
+        Default: OCIO's built-in config (not ``$OCIO``, so previews look the same everywhere).
+
+    Returns
+    -------
+    ndarray of float32, shape (..., 3)
+        Display-encoded values, nominally in [0, 1] (not clipped).
+    """
+    config = builtin_config() if config is None else config
+    ocio = _ocio()
+    display = config.getDefaultDisplay()
+    name = {"tone": config.getDefaultView(display), "srgb": "Un-tone-mapped"}.get(view, view)
+    if name not in list(config.getViews(display)):
+        raise ColorError(f"no view {view!r} for display {display!r}; try one of: tone, srgb, "
+                         + ", ".join(config.getViews(display)))  # fmt: skip
+    src = resolve_colorspace(config, "linear")
+    try:
+        proc = config.getProcessor(src, display, name, ocio.TRANSFORM_DIR_FORWARD)
+        cpu = proc.getOptimizedCPUProcessor(ocio.OPTIMIZATION_LOSSLESS)
+        out = np.array(np.reshape(rgb, (-1, 1, 3)), dtype=np.float32, order="C", copy=True)
+        cpu.applyRGB(out)
+    except ocio.Exception as exc:
+        raise ColorError(f"cannot apply view {name!r}: {_one_line(exc)}") from exc
+    return out.reshape(np.shape(rgb))

@@ -158,22 +158,27 @@ class Write(Step):
     ``makedirs`` creates missing output directories; ``base``, when set, is the directory a
     relative path is taken from once its variables are expanded (a graph file's directory, or
     the batch's working directory), so a path like ``{out}/{stem}.exr`` resolves there too.
+    ``preview``, when set, is a path (same variables) for a tone-mapped 8-bit picture of what
+    is written (:func:`envconv.preview.preview_picture`).
     """
 
     kind = "write"
-    _OWN = ("path", "makedirs", "base")
+    _OWN = ("path", "makedirs", "base", "preview")
 
     def __init__(self, path: str | os.PathLike, makedirs: bool = True, base: str | None = None,
-                 **options: Any) -> None:  # fmt: skip
-        super().__init__(path=os.fspath(path), makedirs=makedirs, base=base, **options)
+                 preview: str | os.PathLike | None = None, **options: Any) -> None:  # fmt: skip
+        preview = None if preview is None else os.fspath(preview)
+        super().__init__(path=os.fspath(path), makedirs=makedirs, base=base, preview=preview,
+                         **options)  # fmt: skip
 
     @property
     def options(self) -> dict[str, Any]:
         return {k: v for k, v in self.params.items() if k not in self._OWN}
 
-    def target(self, variables: dict[str, Any]) -> str:
-        """The output path with ``variables`` expanded (``{face}``/``{level}`` kept)."""
-        path = expand_path(self.params["path"], variables)
+    def target(self, variables: dict[str, Any], key: str = "path") -> str:
+        """The output path (or ``key="preview"``: the preview's) with ``variables`` expanded
+        (``{face}``/``{level}`` kept)."""
+        path = expand_path(self.params[key], variables)
         base = self.params["base"]
         return path if base is None or os.path.isabs(path) else os.path.join(base, path)
 

@@ -99,7 +99,8 @@ def resample_step(**options):
 @cli.command("write")
 @click.argument("output_path", metavar="OUTPUT")
 @write_options
-def write_step(output_path, **options):
+@click.option("--preview", "preview", metavar="PNG", help="Also write a tone-mapped 8-bit picture of what is written (same path variables; see docs/check-a-map.md).")
+def write_step(output_path, preview, **options):
     """Write the latest resample (or the source) to OUTPUT.
 
     OUTPUT may use {stem} {name} {ext} {dir} of the input, {layout} and {size} of the output,
@@ -108,8 +109,9 @@ def write_step(output_path, **options):
     \b
     Example:
       envconv read sky.exr resample --to cube-faces --size 256 write '{stem}_{face}.exr'
+      envconv read sky.exr resample --to cube-vcross write cross.exr --preview cross.png
     """
-    return Write(output_path, **split_options(options)[2])
+    return Write(output_path, preview=preview, **split_options(options)[2])
 
 
 def run_chain(steps: list) -> None:

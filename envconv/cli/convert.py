@@ -23,8 +23,9 @@ __all__ = ["convert_command"]
 @color_options
 @resample_options
 @write_options
+@click.option("--preview", "preview", metavar="PNG", help="Also write a tone-mapped 8-bit picture of the output (auto exposure, ACES SDR view; see docs/check-a-map.md).")
 @click.option("--dry-run", is_flag=True, help="Print what would be written; write nothing.")
-def convert_command(input_path, output_path, dry_run, **options):
+def convert_command(input_path, output_path, dry_run, preview, **options):
     """Convert INPUT to layout --to and write OUTPUT.
 
     Multi-file layouts (cube-faces, paraboloid-split) take {face} in the path. Resampling
@@ -49,7 +50,8 @@ def convert_command(input_path, output_path, dry_run, **options):
     try:
         with ResampleProgress():
             paths = convert_file(input_path, output_path, read=read_kw, resample=resample_kw,
-                                 write=write_kw, color=color_kw, warnings=warnings)  # fmt: skip
+                                 write=write_kw, color=color_kw, warnings=warnings,
+                                 preview=preview)  # fmt: skip
     finally:
         for message in warnings:
             click.echo(f"envconv: warning: {message}", err=True)

@@ -29,11 +29,12 @@ __all__ = ["cli", "main", "EnvconvCommand", "COMMANDS"]
 #: batch, graph and pattern machinery. tests/test_cli_chain.py checks this table.
 COMMANDS = {
     "batch": "batch", "colorspace": "chain", "convert": "convert", "exposure": "chain",
-    "info": "info", "layouts": "layouts", "pattern": "pattern", "read": "chain",
-    "resample": "chain", "rotate": "chain", "run": "run", "sh": "sh", "write": "chain",
+    "info": "info", "layouts": "layouts", "pattern": "pattern", "preview": "preview", "read": "chain",
+    "resample": "chain", "rotate": "chain", "run": "run", "sh": "sh", "view": "view",
+    "write": "chain",
 }  # fmt: skip
 #: Commands that run on their own and cannot be chained with others.
-STANDALONE = {"convert", "info", "layouts", "run", "pattern", "sh"}
+STANDALONE = {"convert", "info", "layouts", "run", "pattern", "preview", "sh", "view"}
 
 
 def _load_commands(names=None) -> None:

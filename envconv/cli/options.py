@@ -15,6 +15,7 @@ from ..layouts import layout_names
 from ..resample import FILTERS
 
 __all__ = [
+    "refuse_overwrite",
     "layout_choice",
     "read_options",
     "resample_options",
@@ -151,3 +152,13 @@ def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
     if with_color:
         groups.append({k for k, _ in COLOR})
     return tuple({k: v for k, v in options.items() if k in names} for names in groups)
+
+
+def refuse_overwrite(input_path: str, output_path: str) -> None:
+    """Usage error (exit 2) when ``output_path`` is the input, or one file of a ``{face}`` input."""
+    import glob
+    import os
+
+    inputs = glob.glob(glob.escape(input_path).replace("{face}", "*")) if "{face}" in input_path else []
+    if os.path.abspath(output_path) in {os.path.abspath(p) for p in [input_path, *inputs]}:
+        raise click.UsageError(f"{output_path} would overwrite the input")

@@ -1,0 +1,149 @@
+"""The viewer page in a real browser (headless Chromium, WebGL2 on SwiftShader), checked
+against the analytic pattern seen by an independent pinhole camera and OCIO's own views."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from test_preview import _ocio_view, camera_dirs
+
+import envconv
+from envconv.cli.main import cli
+from envconv.pattern import LABELS, pattern, render_pattern
+from envconv.viewer import build_page, rgbe_decode, rgbe_encode
+
+SIZE = 256  # (headless Chromium lays out at least ~200 px wide: smaller windows crop)
+BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
+FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
+         "--enable-unsafe-swiftshader", "--disable-background-networking",
+         "--disable-component-update", "--disable-sync", "--no-first-run",
+         "--virtual-time-budget=5000")  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def browser():
+    found = next((path for name in BROWSERS if (path := shutil.which(name))), None)
+    if found is None:
+        pytest.skip("no chromium binary on PATH (apt-get install -y chromium)")
+    return found
+
+
+@pytest.fixture(scope="module")
+def shoot(browser, tmp_path_factory):
+    """Screenshot of a page at a URL fragment, as (H, W, 3) float display values."""
+    import OpenImageIO as oiio
+
+    root = tmp_path_factory.mktemp("viewer")
+    count = iter(range(10**6))
+
+    def run(page: str, fragment: str, size: int = SIZE) -> np.ndarray:
+        k = next(count)
+        shot = root / f"shot{k}.png"
+        cmd = [browser, *FLAGS, f"--user-data-dir={root / 'profile'}", f"--screenshot={shot}",
+               f"--window-size={size},{size}", f"file://{page}#{fragment}"]  # fmt: skip
+        subprocess.run(cmd, capture_output=True, timeout=120, check=False)
+        assert shot.exists(), f"chromium wrote no screenshot for #{fragment}"
+        return oiio.ImageBuf(str(shot)).get_pixels(oiio.FLOAT)[..., :3]
+
+    return run
+
+
+def _page(tmp_path, env, name="page.html") -> str:
+    path = tmp_path / name
+    path.write_text(build_page(env, "test", cap=256), encoding="utf-8")
+    return str(path)
+
+
+RAW = "spheres=0&labels=0&ui=0&tone=0&exposure=0"
+
+
+BLOCK = 8  # about one font pixel of the labels at SIZE (0.06 · SIZE / 2 = 7.7 px)
+#: Largest |block mean of screenshot − block mean of truth| over the label plate. Measured:
+#: right views ≤ 0.1 (edge blur averages out); a wrong label (e.g. "-X" for "+X") ≥ 0.5.
+BLOCK_LIMIT = 0.35
+
+
+def _label_error(shot: np.ndarray, truth_dirs: np.ndarray) -> tuple[float, float]:
+    """(median |shot − truth| over the view, worst 8×8-block error over the label plate),
+    the truth being the pattern through OCIO's un-tone-mapped sRGB view."""
+    truth = pattern(truth_dirs)
+    shown = _ocio_view(truth, "srgb") / 255.0
+    plate = (truth.max(axis=-1) < 0.05) | (truth.min(axis=-1) > 0.99)
+    n = SIZE // BLOCK
+
+    def blocks(a):
+        return a[: n * BLOCK, : n * BLOCK].reshape(n, BLOCK, n, BLOCK, -1).mean(axis=(1, 3))
+
+    on_plate = blocks(plate[..., None].astype(float))[..., 0] > 0.5
+    worst = np.abs(blocks(shot) - blocks(shown)).max(axis=-1)[on_plate].max()
+    return float(np.median(np.abs(shot - shown))), float(worst)
+
+
+@pytest.fixture(scope="module")
+def pattern_page(tmp_path_factory):
+    return _page(tmp_path_factory.mktemp("pages"), render_pattern("latlong", 256, samples=2))
+
+
+@pytest.mark.parametrize("axis", list(LABELS))
+def test_each_axis_view_shows_the_pattern(shoot, pattern_page, axis):
+    shot = shoot(pattern_page, f"view={axis}&{RAW}")
+    assert shot.shape == (SIZE, SIZE, 3)
+    median, label = _label_error(shot, camera_dirs(axis, SIZE))
+    assert median < 0.02 and label < BLOCK_LIMIT, (axis, median, label)
+    k, sign = "XYZ".index(axis[1]), 1 if axis[0] == "+" else -1
+    corner = shot[8:24, 8:24].reshape(-1, 3).mean(axis=0)  # off the plate: the axis's tint
+    assert sign * (corner[k] - corner.mean()) > 0, (axis, corner)
+
+
+@pytest.mark.parametrize("preset", ["blender", "unity", "skylibs"])
+def test_convention_selector_shows_the_map_as_that_tool_would(shoot, tmp_path, preset):
+    """A pattern drawn for ``preset`` reads right with the selector on ``preset`` (every axis),
+    and wrong as envconv's own lat-long."""
+    page = _page(tmp_path, render_pattern("latlong", 256, samples=2, convention=preset))
+    for axis in LABELS:
+        _, right = _label_error(shoot(page, f"view={axis}&conv={preset}&{RAW}"), camera_dirs(axis, SIZE))
+        _, wrong = _label_error(shoot(page, f"view={axis}&conv=envconv&{RAW}"), camera_dirs(axis, SIZE))
+        assert right < BLOCK_LIMIT < wrong, (preset, axis, right, wrong)
+
+
+def test_tone_curve_and_auto_exposure_in_the_page(shoot, tmp_path):
+    level = 0.6  # below 1, so the un-tone-mapped view does not clip either
+    env = envconv.EnvMap(np.full((64, 128, 3), level, np.float32), "latlong")
+    page = _page(tmp_path, env)
+    centre = slice(SIZE // 2 - 8, SIZE // 2 + 8)
+    grey = np.full((1, 1, 3), 0.18, np.float32)
+    # automatic exposure (the page's starting value): a constant map shows mid-grey
+    shot = shoot(page, "spheres=0&labels=0&ui=0")[centre, centre]
+    assert np.abs(shot * 255 - _ocio_view(grey, "tone")).max() <= 2.5
+    # exposure 0, ACES tone curve and un-tone-mapped sRGB, against OCIO's processors
+    value = np.full((1, 1, 3), level, np.float32)
+    for tone, view in (("1", "tone"), ("0", "srgb")):
+        shot = shoot(page, f"spheres=0&labels=0&ui=0&exposure=0&tone={tone}")[centre, centre]
+        assert np.abs(shot * 255 - _ocio_view(value, view)).max() <= 2.5, view
+
+
+def test_rgbe_round_trip():
+    rng = np.random.default_rng(3)
+    rgb = np.exp(rng.uniform(-20, 15, (32, 32, 3))).astype(np.float32)
+    back = rgbe_decode(rgbe_encode(rgb))
+    peak = rgb.max(axis=-1, keepdims=True)
+    assert np.all(np.abs(back - rgb) <= peak / 128)  # 8-bit mantissa of the largest channel
+    bad = np.array([[[np.nan, -1.0, np.inf]]], np.float32)
+    assert (rgbe_decode(rgbe_encode(bad)) == 0).all()
+
+
+def test_view_cli_writes_one_self_contained_page(tmp_path):
+    src = tmp_path / "sky.exr"
+    envconv.write(render_pattern("cube-vcross", 32), str(src))
+    out = tmp_path / "sky.html"
+    result = CliRunner().invoke(cli, ["view", str(src), "-o", str(out)])
+    assert result.exit_code == 0, result.output
+    text = out.read_text(encoding="utf-8")
+    assert "<script src" not in text and "http://" not in text and "https://" not in text
+    assert '"width":64,"height":32' in text  # a cube of N = 32 keeps its horizon: 64 × 32
+    result = CliRunner().invoke(cli, ["view", str(tmp_path / "none.exr"), "-o", str(out)])
+    assert result.exit_code == 1
