@@ -42,7 +42,8 @@ def convert_file(
     read, resample, write = dict(read or {}), dict(resample or {}), dict(write or {})
     route_face_sets(input_path, read, resample, write)
     to = resample.pop("to")
-    io.output_paths(to, output_path, faces=write.get("faces"))
+    outputs = io.output_paths(to, output_path, faces=write.get("faces"))
+    _refuse_writing_onto_inputs(input_path, read.get("layout"), read.get("faces"), outputs)
     if preview is not None and os.path.abspath(preview) in (os.path.abspath(output_path),
                                                             os.path.abspath(input_path)):  # fmt: skip
         raise UsageError(f"--preview {preview} would overwrite the input or the output")
@@ -111,6 +112,26 @@ def plan_convert(
         "compression": plan.compression, "input_colorspace": source,
         "working_colorspace": working, "output_colorspace": plan.colorspace,
     }  # fmt: skip
+
+
+def _refuse_writing_onto_inputs(input_path, layout, faces, outputs: list[str]) -> None:
+    """UsageError, before any work, when an output file is an input file (the same path, or
+    the same file through a link): envconv never writes onto its input."""
+    path = os.fspath(input_path)
+    if "{face}" in path:
+        from .face_files import find_face_files
+
+        inputs = find_face_files(path, layout, faces).paths
+    else:
+        inputs = [path]
+    existing = [p for p in inputs if os.path.exists(p)]
+    for output in outputs:
+        if not os.path.exists(output):
+            continue
+        for source in existing:
+            if os.path.samefile(output, source):
+                raise UsageError(f"{output} is the input {source}; envconv never writes onto its "
+                                 "input: choose another output path")  # fmt: skip
 
 
 def _first_file(path: str, layout: str | None, faces=None) -> str:

@@ -155,3 +155,17 @@ def test_threads_option_gives_the_same_file(tmp_path, sky):
     assert outs[0].tobytes() == outs[1].tobytes()
     bad = run_cli(["--threads", 0, "convert", sky, tmp_path / "x.exr", "--to", "angular"])
     assert bad.exit_code == 2 and len(stderr_lines(bad)) == 1
+
+
+def test_convert_never_writes_onto_its_input(tmp_path, sky):
+    """The output path is the input, or a link to it: one line, a non-zero status, the input
+    untouched (the same bytes and mtime)."""
+    before = file_state(sky)
+    link = tmp_path / "link.exr"
+    os.symlink(sky, link)
+    for target in (sky, link):
+        result = run_cli(["convert", sky, target, "--to", "cube-vcross", "--size", 8])
+        assert result.exit_code != 0
+        lines = stderr_lines(result)
+        assert len(lines) == 1 and "never writes onto its input" in lines[0], lines
+        assert file_state(sky) == before
