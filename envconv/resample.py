@@ -179,7 +179,8 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     channels = list(envmap.channels)
     src = envmap.pixels
     alpha_index = envmap.alpha_index
-    out = np.empty((height, width, src.shape[2]), np.float32)
+    # Zeroed (np.zeros maps fresh pages lazily): the kernel then never touches the empty cells.
+    out = np.zeros((height, width, src.shape[2]), np.float32)
     same_grid = (
         to.name == envmap.layout.name
         and size == envmap.size
@@ -189,7 +190,7 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     )
     # The coverage is kept for an alpha channel, the mip chain and the same-grid copy below.
     needs_coverage = alpha or mips or same_grid
-    coverage = np.empty((height, width), np.float32) if needs_coverage else None
+    coverage = np.zeros((height, width), np.float32) if needs_coverage else None
     sgeo = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
     dgeo = kernel_geometry(to, size, guard_px)
     log.debug(
@@ -203,10 +204,10 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     src = np.ascontiguousarray(src)
     rip, rip_levels, rip_row_count = source_rips(envmap, src, n_samples, filter, to, size)
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
-    weights = np.empty((height, width), np.float64) if mips else None
+    weights = np.zeros((height, width), np.float64) if mips else None
     kernels.resample_rows(
         src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
-        FILTERS[filter], rot, fill, out, coverage, weights,
+        FILTERS[filter], rot, fill, out, coverage, weights, zeroed=True,
     )  # fmt: skip
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that

@@ -17,6 +17,7 @@ struct ResampleOutput {
     int64_t height, width, channels;
     float* alpha;
     double* weights;
+    bool zeroed;  // every output array already holds zeros: empty cells are left untouched
 };
 
 // A lat-long source's rip-map levels (rip_levels = 0: none), filled in rip_rows rows per pole.

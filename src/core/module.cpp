@@ -59,7 +59,7 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
               double scale_x, double scale_y, int samples, int filter,
               Array<const double, nb::shape<3, 3>> rot, bool fill, Array<float, nb::ndim<3>> out,
               Array<float, nb::ndim<2>> alpha, Array<double, nb::ndim<2>> weights, int threads,
-              Array<int64_t, nb::shape<1>> progress) {
+              Array<int64_t, nb::shape<1>> progress, bool zeroed) {
     envconv::Conversion cv;
     cv.src = make_geometry(sgeo, s_cell_face, s_cell_turns, s_face_cell);
     cv.dst = make_geometry(dgeo, d_cell_face, d_cell_turns, d_face_cell);
@@ -85,7 +85,7 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
     envconv::RipMap rips{make_image(rip), rip_levels, rip_rows};
     envconv::ResampleOutput o{out.data(), height, width, nch,
                               has_alpha ? alpha.data() : nullptr,
-                              has_weights ? weights.data() : nullptr};
+                              has_weights ? weights.data() : nullptr, zeroed};
     envconv::Image image = make_image(src);
     int64_t* counter = progress.is_valid() ? progress.data() : nullptr;
     nb::gil_scoped_release release;
@@ -294,7 +294,7 @@ NB_MODULE(_core, m) {
           "s_cell_face"_a, "s_cell_turns"_a, "s_face_cell"_a, "dgeo"_a, "d_cell_face"_a,
           "d_cell_turns"_a, "d_face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "filter"_a,
           "rot"_a, "fill"_a, "out"_a, "alpha"_a.none(), "weights"_a.none(), "threads"_a,
-          "progress"_a.none() = nb::none());
+          "progress"_a.none() = nb::none(), "zeroed"_a = false);
     m.def("fill_rips", &fill_rips, "src"_a, "levels"_a, "rows"_a, "out"_a, "threads"_a);
     m.def("reduce_blocks", &reduce_blocks, "src"_a, "wsrc"_a, "asrc"_a, "bx"_a, "by"_a, "out"_a,
           "wout"_a, "aout"_a, "threads"_a);

@@ -418,6 +418,7 @@ void resample_band(const Job& job, int64_t band, Scratch& scratch) {
             double x0 = double(i0) * cv.scale_x, y0 = double(j0) * cv.scale_y;
             double x1 = double(i1) * cv.scale_x, y1 = double(j1) * cv.scale_y;
             if (!cv.fill && tile_in_empty_cell(d, x0, y0, x1, y1)) {
+                if (out.zeroed) continue;  // zeros already, and their pages never touched
                 std::fill(scratch.acc.begin(), scratch.acc.end(), 0.0);
                 for (int64_t j = j0; j < j1; ++j) {
                     for (int64_t i = i0; i < i1; ++i) store(out, j, i, scratch.acc.data(), 0.0, 0.0);
