@@ -21,7 +21,7 @@ from .file_io import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
 from .layouts import get_layout
 
-__all__ = ["write", "output_paths", "LevelImage"]
+__all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
 
 log = logging.getLogger(__name__)
 
@@ -172,6 +172,12 @@ def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarra
         extra["envconv:roughness"] = str(envmap.metadata["envconv:roughness"])
     data = encode_texture(fmt, images, cube, envmap.alpha_index is None,
                           f"envconv {__version__}", extra)  # fmt: skip
+    return write_bytes(data, path)
+
+
+def write_bytes(data: bytes, path: str) -> str:
+    """Write ``data`` to ``path`` through a temporary file renamed into place; returns the
+    path, or raises ImageIOError with one line."""
     temp = _temp_path(path)
     try:
         with open(temp, "wb") as handle:

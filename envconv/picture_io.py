@@ -13,7 +13,7 @@ import numpy as np
 
 from .errors import ImageIOError
 from .file_io import _first_line, _oiio
-from .io_write import _temp_path
+from .io_write import _temp_path, write_bytes
 
 __all__ = ["write_picture", "write_page"]
 
@@ -53,15 +53,4 @@ def write_page(text: str, path: str | os.PathLike) -> str:
 
     Returns the path written; raises :class:`~envconv.errors.ImageIOError` on failure.
     """
-    target = os.fspath(path)
-    temp = _temp_path(target)
-    try:
-        with open(temp, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.replace(temp, target)
-    except OSError as exc:
-        raise ImageIOError(f"cannot write {target}: {exc.strerror or exc}") from exc
-    finally:
-        if os.path.exists(temp):
-            os.remove(temp)
-    return target
+    return write_bytes(text.encode("utf-8"), os.fspath(path))
