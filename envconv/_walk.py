@@ -47,7 +47,7 @@ class SourceHeader:
         level = int(options.get("level", 0) or 0)
         layout, first = options.get("layout"), path
         if "{face}" in path:
-            from .face_files import find_face_files
+            from .io.face_files import find_face_files
 
             files = find_face_files(path, layout, options.get("faces"))
             layout, first = files.layout, files.paths[0]
@@ -175,7 +175,7 @@ class Walk:
 
 def _write_preview(env, path: str) -> str:
     """A tone-mapped 8-bit picture of ``env`` at ``path`` (a write step's ``preview``)."""
-    from .picture_io import write_picture
+    from .io.picture import write_picture
     from .preview import preview_picture
 
     return write_picture(preview_picture(env), path)

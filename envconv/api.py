@@ -32,12 +32,13 @@ def convert_file(
 
     ``read``, ``resample`` and ``write`` are keyword arguments for :func:`envconv.io.read`,
     :func:`envconv.resample.convert` and :func:`envconv.io.write`; ``color`` for
-    :func:`envconv.colorflow.prepare_input` (exposure, NaN/Inf, negatives). Reading converts
+    :func:`envconv.prepare.prepare_input` (exposure, NaN/Inf, negatives). Reading converts
     the source to scene-linear float32 and writing converts it to the output colour space. The output path is checked against the layout before any
     pixel is read, so a bad ``{face}`` path fails fast. One-line warnings (NaN/Inf, clipping)
     are appended to ``warnings`` when it is a list, else logged at WARNING level.
     """
-    from .colorflow import plan_output, prepare_input
+    from .io.encode import plan_output
+    from .prepare import prepare_input
 
     read, resample, write = dict(read or {}), dict(resample or {}), dict(write or {})
     route_face_sets(input_path, read, resample, write)
@@ -60,7 +61,7 @@ def convert_file(
     result = convert(source, to, **resample)
     paths = io.write(result, output_path, **write, warnings=warnings)
     if preview is not None:
-        from .picture_io import write_picture
+        from .io.picture import write_picture
         from .preview import preview_picture
 
         paths.append(write_picture(preview_picture(result), preview))
@@ -81,7 +82,8 @@ def plan_convert(
     file), ``levels``, ``channels``, ``bit_depth``, ``compression`` (None: format default),
     ``input_colorspace``, ``working_colorspace`` and ``output_colorspace`` (OCIO names).
     """
-    from .colorflow import WORKING_COLORSPACE, input_colorspace_of, plan_output
+    from .color import WORKING_COLORSPACE, input_colorspace_of
+    from .io.encode import plan_output
     from .pipeline import Pipeline, Read, Resample, Write
 
     read, write, color = dict(read or {}), dict(write or {}), dict(color or {})
@@ -119,7 +121,7 @@ def _refuse_writing_onto_inputs(input_path, layout, faces, outputs: list[str]) -
     the same file through a link): envconv never writes onto its input."""
     path = os.fspath(input_path)
     if "{face}" in path:
-        from .face_files import find_face_files
+        from .io.face_files import find_face_files
 
         inputs = find_face_files(path, layout, faces).paths
     else:
@@ -138,7 +140,7 @@ def _first_file(path: str, layout: str | None, faces=None) -> str:
     """The file whose header stands for a (possibly ``{face}``) input path."""
     if "{face}" not in path:
         return path
-    from .face_files import find_face_files
+    from .io.face_files import find_face_files
 
     return find_face_files(path, layout, faces).paths[0]
 

@@ -32,7 +32,7 @@ def _first_file(path: str, layout: str | None) -> str:
     """The file whose header stands for a (possibly ``{face}``) path."""
     if "{face}" not in path:
         return path
-    from .face_files import find_face_files
+    from .io.face_files import find_face_files
 
     return find_face_files(path, layout).paths[0]
 
@@ -70,10 +70,10 @@ def describe(path: str, layout: str | None = None, level: int = 0, part: str | N
     A layout given as ``layout`` (``--from``) that the image does not fit raises LayoutError,
     as reading does; when detection finds none, ``layout`` is ``"unknown"``.
     """
-    from .colorflow import input_colorspace_of, working_pixels
+    from .color import input_colorspace_of, working_pixels
     from .detect import find_layout
-    from .file_io import read_file_header
     from .io import mip_levels, read, read_unplaced
+    from .io.files import read_file_header
 
     path = str(path)
     header = read_file_header(_first_file(path, layout), level, part)

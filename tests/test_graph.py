@@ -87,7 +87,7 @@ def test_dry_run_prints_the_plan_without_pixels(hdri, tmp_path, monkeypatch):
     def no_pixels(*args, **kwargs):
         raise AssertionError("dry run read pixels")
 
-    monkeypatch.setattr(io, "read_file", no_pixels)
+    monkeypatch.setattr(io.reader, "read_file", no_pixels)
     result = run_cli(["run", path, "--dry-run"])
     assert result.exit_code == 0, result.output
     assert not (tmp_path / "build").exists()

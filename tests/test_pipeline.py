@@ -179,7 +179,7 @@ def test_plan_reads_headers_only(sky, tmp_path, monkeypatch):
     def no_pixels(*args, **kwargs):
         raise AssertionError("plan read pixels")
 
-    monkeypatch.setattr(io, "read_file", no_pixels)
+    monkeypatch.setattr(io.reader, "read_file", no_pixels)
     faces, para = Pipeline(steps).plan()
     expected_n = envconv.resample.default_size(
         envconv.EnvMap(np.zeros((32, 64, 3), np.float32), "latlong"), "cube-faces"

@@ -3,7 +3,7 @@
 Each group is a list of click decorators whose parameter names equal the keyword arguments of
 the library function they are passed to: ``READ`` → :func:`envconv.io.read`, ``RESAMPLE`` →
 :func:`envconv.resample.convert`, ``WRITE`` → :func:`envconv.io.write`, ``COLOR`` →
-:func:`envconv.colorflow.prepare_input`. A command splits its
+:func:`envconv.prepare.prepare_input`. A command splits its
 keyword arguments with :func:`split_options`. Layout choices come from the registry.
 """
 
@@ -116,7 +116,7 @@ WRITE = [
     _OCIO_CONFIG,
 ]  # fmt: skip
 
-#: Options of :func:`envconv.colorflow.prepare_input` (range and NaN/Inf of the source).
+#: Options of :func:`envconv.prepare.prepare_input` (range and NaN/Inf of the source).
 COLOR = [
     ("exposure", click.option("--exposure", type=float, default=0.0, metavar="STOPS", help="Scale colour by 2**STOPS before resampling (e.g. -2 to fit HDR into 8 bits).")),
     ("fix_nonfinite", click.option("--fix-nonfinite", "fix_nonfinite", type=click.Choice(["none", "black", "box3", "error"]), default="none", show_default=True, help="Replace NaN/Inf in the input: with 0, with the mean of finite 3x3 neighbours, or stop.")),
@@ -146,7 +146,7 @@ def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
     """Split a command's keyword arguments into (read, resample, write) keyword dicts.
 
     With ``with_color=True`` a fourth dict holds the ``COLOR`` options (for
-    :func:`envconv.colorflow.prepare_input`). A name in two groups goes to both.
+    :func:`envconv.prepare.prepare_input`). A name in two groups goes to both.
     """
     groups = [{k for k, _ in READ}, {k for k, _ in RESAMPLE}, {k for k, _ in WRITE}]
     if with_color:

@@ -29,7 +29,7 @@ def preview_command(input_path, output_path, layout, in_convention, exposure, vi
       envconv preview blender_sky.exr -o sheet.png --in-convention blender --exposure -1
     """
     from .. import io
-    from ..picture_io import write_picture
+    from ..io.picture import write_picture
     from ..preview import contact_sheet
 
     refuse_overwrite(input_path, output_path)

@@ -36,7 +36,7 @@ def view_command(input_path, output_path, open_page, layout, in_convention, inpu
       envconv view sky_{face}.png -o sky.html
     """
     from .. import io
-    from ..picture_io import write_page
+    from ..io.picture import write_page
     from ..viewer import build_page
 
     output_path = output_path or _default_output(input_path)

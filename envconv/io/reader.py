@@ -2,7 +2,7 @@
 
 Formats: OpenEXR (half or float), Radiance HDR, TIFF, PNG and JPEG, chosen by the file
 extension. Pixels are always float32 in memory, in scene-linear Rec.709: :func:`read` and
-:func:`write` convert colour, range and bit depth through :mod:`envconv.colorflow`.
+:func:`write` convert colour, range and bit depth through :mod:`envconv.color` and :mod:`envconv.io.encode`.
 
 Multi-file layouts (cube-faces, paraboloid-split) name their parts with ``{face}`` in the path:
 px nx py ny pz nz, or front back. ``faces=`` names another program's skybox files and face
@@ -22,10 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from .detect import place_image
-from .envmap import EnvMap
-from .errors import ImageIOError, LayoutError
-from .file_io import (
+from ..detect import place_image
+from ..envmap import EnvMap
+from ..errors import ImageIOError, LayoutError
+from ..layouts import get_layout
+from .files import (
     FileHeader,
     _open_input,
     read_file,
@@ -33,12 +34,9 @@ from .file_io import (
     read_image,
     read_pixel_type,
 )
-from .formats import FORMATS, WRITE_FORMATS, choose_pixel_type
-from .io_write import output_paths, write
-from .layouts import get_layout
 
-__all__ = ["read", "read_unplaced", "write", "read_image", "read_header", "read_pixel_type",
-           "choose_pixel_type", "output_paths", "mip_levels", "FORMATS", "WRITE_FORMATS"]  # fmt: skip
+__all__ = ["read", "read_unplaced", "read_image", "read_header", "read_pixel_type", "mip_levels",
+           "resample_edge_aligned"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -87,11 +85,11 @@ def read(
     The map is the file's display window (:mod:`envconv.file_io`). Where the data window
     leaves holes, every channel is 0 there, an alpha channel ``A`` (1 elsewhere) is added
     when the file has none, and ``EnvMap.valid`` marks them. Pixels are converted to linear
-    Rec.709 by :func:`envconv.colorflow.to_working`. A lat-long stored with edge-aligned
+    Rec.709 by :func:`envconv.color.to_working`. A lat-long stored with edge-aligned
     samples (``oiio:sampleborder``, as OpenEXR envmaps written by other tools) is resampled
-    onto pixel centres (:func:`envconv.colorflow.resample_edge_aligned`).
+    onto pixel centres (:func:`resample_edge_aligned`).
     """
-    from .colorflow import to_working
+    from ..color import to_working
 
     path = os.fspath(path)
     if "{face}" in path:
@@ -108,8 +106,7 @@ def read(
     found, guard, _ = place_image(header.width, header.height, metadata, layout, pixels, level)
     if found.name == "latlong" and metadata.get("oiio:sampleborder") and (
         "envconv:layout" not in metadata  # envconv's own files use pixel centres
-    ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see colorflow.resample_edge_aligned
-        from .colorflow import resample_edge_aligned
+    ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see resample_edge_aligned
 
         pixels = resample_edge_aligned(pixels)
         valid = None if valid is None else resample_edge_aligned(valid[:, :, None])[:, :, 0]
@@ -176,7 +173,7 @@ def _read_multi(template: str, layout: str | None, level: int, part: str | None,
     pixels = [c[0] for c in cells]
     valids = [c[3] for c in cells]
     if files.face_set is not None:
-        from .facesets import to_envconv
+        from ..facesets import to_envconv
 
         pixels = to_envconv(files.face_set, pixels)
         if holes:
@@ -215,3 +212,48 @@ def _content_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
         for k, v in metadata.items()
         if k in _KEEP_NAMES or (not k.startswith(_DROP_PREFIXES) and k not in _DROP_NAMES)
     }
+
+
+def _edge_weights(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """For centre k of n: left sample index and weight of the right one, on an edge grid."""
+    x = (np.arange(n, dtype=np.float64) + 0.5) * (n - 1) / n
+    i0 = np.minimum(np.floor(x).astype(np.intp), n - 2)
+    return i0, (x - i0).astype(np.float32)
+
+def resample_edge_aligned(pixels: np.ndarray) -> np.ndarray:
+    """Resample an image with edge-aligned samples onto the pixel-centre grid, same size.
+
+    In a file with ``oiio:sampleborder`` = 1 (what OIIO reports for every OpenEXR with an
+    ``envmap`` attribute, after OpenEXR's ``ImfEnvmap``), sample (i, j) of a W × H image sits
+    at u = i / (W − 1), v = j / (H − 1): the first and last columns both lie on the seam
+    (lon = ±π) and the first and last rows on the poles. envconv's pixel (i, j) has its
+    centre at ((i + 0.5) / W, (j + 0.5) / H), i.e. at file position (i + 0.5)(W − 1)/W.
+    Each output value is the linear interpolation of the two nearest file samples, rows and
+    columns separably (exact for constants and for functions linear in u and v). An axis of
+    one sample is left as it is.
+
+    Parameters
+    ----------
+    pixels : ndarray, shape (H, W, C)
+
+    Returns
+    -------
+    ndarray of float32, shape (H, W, C)
+
+    Examples
+    --------
+    >>> px = np.arange(3, dtype=np.float32).reshape(1, 3, 1) * np.ones((2, 1, 1), np.float32)
+    >>> [round(float(x), 4) for x in resample_edge_aligned(px)[0, :, 0]]  # u = 1/6, 1/2, 5/6
+    [0.3333, 1.0, 1.6667]
+    """
+    out = np.asarray(pixels, np.float32)
+    height, width = out.shape[:2]
+    if height > 1:
+        j0, t = _edge_weights(height)
+        t = t[:, None, None]
+        out = out[j0] * (1 - t) + out[j0 + 1] * t
+    if width > 1:
+        i0, t = _edge_weights(width)
+        t = t[None, :, None]
+        out = out[:, i0] * (1 - t) + out[:, i0 + 1] * t
+    return np.ascontiguousarray(out, np.float32)

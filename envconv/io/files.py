@@ -31,9 +31,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .errors import ImageIOError
-from .exr_io import is_plain_exr as _plain_exr
-from .exr_io import read_exr_pixels as _read_exr_pixels
+from ..errors import ImageIOError
+from .exr import is_plain_exr as _plain_exr
+from .exr import read_exr_pixels as _read_exr_pixels
 from .formats import FORMATS
 
 __all__ = ["read_file", "read_file_header", "read_image", "read_header", "read_pixel_type",

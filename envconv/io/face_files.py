@@ -15,9 +15,9 @@ from __future__ import annotations
 import os
 from typing import NamedTuple
 
-from .errors import ImageIOError, LayoutError
-from .facesets import FACE_SETS, FaceSet, get_face_set
-from .layouts import get_layout
+from ..errors import ImageIOError, LayoutError
+from ..facesets import FACE_SETS, FaceSet, get_face_set
+from ..layouts import get_layout
 
 __all__ = ["FaceFiles", "find_face_files", "part_path"]
 

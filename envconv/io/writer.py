@@ -3,7 +3,7 @@
 Every output is written to a temporary file in the destination directory and renamed into place,
 so a failure never leaves a partial file, and inputs are never opened for writing. Pixels are
 converted from the working space to the output's colour space, range and bit depth by
-:func:`envconv.colorflow.encode_output`.
+:func:`envconv.io.encode.encode_output`.
 """
 
 from __future__ import annotations
@@ -15,11 +15,11 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .envmap import EnvMap
-from .errors import ImageIOError, LayoutError
-from .file_io import _first_line, _oiio
+from ..envmap import EnvMap
+from ..errors import ImageIOError, LayoutError
+from ..layouts import get_layout
+from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
-from .layouts import get_layout
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
 
@@ -70,7 +70,7 @@ def _face_names(layout, faces) -> tuple[str, ...]:
     """File-name parts of a layout's faces, or of a face set's files (cube-faces only)."""
     if faces is None:
         return layout.face_names
-    from .facesets import get_face_set
+    from ..facesets import get_face_set
 
     face_set = get_face_set(faces)
     if layout.name != "cube-faces":
@@ -95,7 +95,7 @@ def write(
     Colour is converted from the map's ``oiio:ColorSpace`` to ``output_colorspace`` (default:
     linear Rec.709 for float/half, sRGB for integer types), then clipped and quantized, 8-bit
     with deterministic dither unless ``dither=False``; ``compression`` is checked against
-    :data:`envconv.colorflow.COMPRESSIONS` (see :func:`envconv.colorflow.encode_output`).
+    :data:`envconv.io.formats.COMPRESSIONS` (see :func:`envconv.io.encode.encode_output`).
     Clipping warnings are appended to ``warnings`` when it is a list, else logged.
     Metadata is carried over, plus ``envconv:layout``, ``envconv:size``, ``envconv:guard``,
     ``envconv:version`` and, for unguarded latlong and cube-exr EXRs, OpenEXR's ``envmap``.
@@ -107,7 +107,7 @@ def write(
     :mod:`envconv.facesets`). A ``.dds`` or ``.ktx2`` path gets a texture container with every
     level (:mod:`envconv.textures`). Returns the paths written.
     """
-    from .colorflow import encode_output
+    from .encode import encode_output
 
     _check_parts(envmap, os.fspath(path))
     encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
@@ -162,7 +162,7 @@ def _check_parts(envmap: EnvMap, path: str) -> None:
 
 def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarray]) -> str:
     """Write a DDS or KTX2 file (:mod:`envconv.textures`) through a temporary file."""
-    from . import __version__
+    from .. import __version__
     from .textures import encode_texture, texture_images
 
     output_paths(envmap.layout, path)
@@ -200,7 +200,7 @@ def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
     cells = [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
     if faces is None:
         return cells
-    from .facesets import from_envconv
+    from ..facesets import from_envconv
 
     return from_envconv(faces, cells)
 
@@ -301,7 +301,7 @@ class LevelImage(NamedTuple):
 
     ``attributes`` are the (name, value) pairs its OIIO ImageSpec gets, in that order (see
     :func:`_image_spec`); ``data`` is (H, W, C) float32 holding the values to store (codes,
-    half or float, from :func:`envconv.colorflow.encode_output`)."""
+    half or float, from :func:`envconv.io.encode.encode_output`)."""
 
     format: str
     channels: tuple[str, ...]
@@ -367,7 +367,7 @@ _DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
 def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str, Any]]:
     """The attributes that tag a file as envconv's: layout, size, guard, version, face, and
     OpenEXR's envmap (through OIIO's ``textureformat``)."""
-    from . import __version__
+    from .. import __version__
 
     tags: list[tuple[str, Any]] = []
     if fmt in _DESCRIPTION_FORMATS:

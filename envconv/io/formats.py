@@ -1,15 +1,15 @@
 """The image formats envconv writes and reads by extension, and the pixel type each output gets.
 
-No file is touched here: this is the table :mod:`envconv.io` and :mod:`envconv.colorflow` share.
+No file is touched here: the tables the readers, the writers and the output plan (:mod:`envconv.io.encode`) share.
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import ImageIOError
+from ..errors import ImageIOError, UsageError
 
-__all__ = ["FORMATS", "CONTAINER_FORMATS", "WRITE_FORMATS", "format_of", "choose_pixel_type"]
+__all__ = ["COMPRESSIONS", "check_compression", "FORMATS", "CONTAINER_FORMATS", "WRITE_FORMATS", "format_of", "choose_pixel_type"]
 
 #: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
 FORMATS = {
@@ -58,3 +58,30 @@ def choose_pixel_type(path: str, pixel_type: str, bit_depth: str | None) -> str:
     if default is not None:
         return default
     return "half" if pixel_type == "uint8" else "float"
+
+
+#: ``--compression`` choices per OIIO format; ``name:level`` is accepted where marked ``:``.
+COMPRESSIONS = {
+    "openexr": ("none", "rle", "zips:", "zip:", "piz", "pxr24", "b44", "b44a", "dwaa:", "dwab:",
+                "htj2k32", "htj2k256"),
+    "tiff": ("none", "lzw", "zip:", "packbits"),
+}  # fmt: skip
+
+def check_compression(fmt: str, compression: str | None) -> str | None:
+    """Validate ``compression`` for OIIO format ``fmt``; return it lower-cased (None: default).
+
+    Raises UsageError naming the choices (or saying the format takes none).
+    """
+    if compression is None:
+        return None
+    value = str(compression).strip().lower()
+    choices = COMPRESSIONS.get(fmt)
+    if not choices:
+        raise UsageError(f"{fmt} output takes no --compression (only EXR and TIFF do)")
+    name, _, level = value.partition(":")
+    for choice in choices:
+        if name == choice.rstrip(":") and (not level or (choice.endswith(":") and level.isdigit())):
+            return value
+    shown = ", ".join(c.rstrip(":") for c in choices)
+    raise UsageError(f"unknown {fmt} compression {compression!r}; choose one of {shown} "
+                     "(zip, zips, dwaa and dwab take a level, e.g. dwaa:45)")  # fmt: skip

@@ -11,9 +11,9 @@ import os
 
 import numpy as np
 
-from .errors import ImageIOError
-from .file_io import _first_line, _oiio
-from .io_write import _temp_path, write_bytes
+from ..errors import ImageIOError
+from .files import _first_line, _oiio
+from .writer import _temp_path, write_bytes
 
 __all__ = ["write_picture", "write_page"]
 
