@@ -15,7 +15,8 @@
 4. Rounded to uint8.
 
 **Contact sheet** (:func:`contact_sheet`): the map in its own layout; six 90° perspective
-views along the world axes of envconv's frame (right-handed, +Y up: OpenEXR/USD), each an
+views along the world axes of envconv's frame (right-handed, +Y up: OpenEXR/USD) or, with
+``convention``, of that tool's frame (Blender's "+Z" is envconv's +Y), each an
 unmirrored view from the centre, taken from the cube faces of ``envconv.convert``; a mirror
 ball (layout ``sphere``: an orthographic camera looking along −Z at a mirror ball); a diffuse
 ball (the same camera looking at a white Lambertian ball, lit by the map's irradiance); a line
@@ -34,7 +35,7 @@ from .font import draw_text, text_width
 from .geometry import dir_to_uv, pixel_directions, pixel_solid_angles
 
 __all__ = ["MID_GREY", "WORK_HEIGHT", "VIEW_FACES", "auto_exposure", "tone_map", "checkerboard",
-           "working_map", "perspective_views", "mirror_ball", "diffuse_ball", "map_stats",
+           "working_map", "view_axes", "perspective_views", "mirror_ball", "diffuse_ball", "map_stats",
            "contact_sheet", "preview_picture"]  # fmt: skip
 
 log = logging.getLogger(__name__)
@@ -112,16 +113,38 @@ def working_map(envmap: EnvMap, in_convention=None) -> EnvMap:
     return convert(envmap, "latlong", size=size, in_convention=in_convention)
 
 
-def perspective_views(work: EnvMap, size: int = 256) -> dict[str, np.ndarray]:
+def view_axes(convention=None) -> dict[str, str]:
+    """Axis of a tool's world frame ("+X" … "-Z") → the axis of envconv's frame it is.
+
+    ``convention`` is a preset name or an AXES frame (:func:`envconv.conventions.world_frame`);
+    e.g. Blender (Z-up right-handed) gives {"+Z": "+Y", "+Y": "-Z", …}.
+    """
+    from .conventions import world_frame
+
+    frame, _ = world_frame(convention)
+    out = {}
+    for axis in VIEW_FACES:
+        e = np.zeros(3)
+        e["XYZ".index(axis[1])] = 1.0 if axis[0] == "+" else -1.0
+        d = frame @ e
+        k = int(np.argmax(np.abs(d)))
+        out[axis] = ("+" if d[k] > 0 else "-") + "XYZ"[k]
+    return out
+
+
+def perspective_views(work: EnvMap, size: int = 256, convention=None) -> dict[str, np.ndarray]:
     """Six 90° perspective views (size, size, C) from the centre, keyed "+X" … "-Z".
 
     Each is the unmirrored picture a camera at the centre sees looking along the world axis
-    (up +Y for the four horizon views, −Z for "+Y", +Z for "-Y").
+    (in envconv's frame: up +Y for the four horizon views, −Z for "+Y", +Z for "-Y"). With a
+    ``convention`` the keys are the axes of that tool's world frame (:func:`view_axes`): the
+    view keyed "+Z" for Blender is envconv's "+Y" view.
     """
     from .resample import convert
 
     cube = convert(work, "cube-faces", size=size).pixels
-    return {axis: cube[:, size * k : size * (k + 1)] for axis, k in VIEW_FACES.items()}
+    ours = {axis: cube[:, size * k : size * (k + 1)] for axis, k in VIEW_FACES.items()}
+    return {axis: ours[envconv_axis] for axis, envconv_axis in view_axes(convention).items()}
 
 
 def mirror_ball(work: EnvMap, size: int = 256) -> EnvMap:
@@ -221,12 +244,15 @@ def _thumbnail(envmap: EnvMap, max_width: int) -> np.ndarray:
 
 
 def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
-                  in_convention=None, cell: int = 192) -> np.ndarray:  # fmt: skip
+                  in_convention=None, cell: int = 192, convention=None) -> np.ndarray:  # fmt: skip
     """(H, W, 3) uint8 labelled contact sheet of ``envmap`` (see the module docstring).
 
     One exposure (automatic, from the working lat-long's solid-angle-weighted log-average,
-    plus ``exposure``) is used for every panel, so panels compare.
+    plus ``exposure``) is used for every panel, so panels compare. ``convention`` (a preset
+    name or an AXES frame) shows and labels the six views in that tool's world axes.
     """
+    from .conventions import world_frame
+
     work = working_map(envmap, in_convention)
     wrgb, _ = _rgb_alpha(work.pixels, work.channels)
     stops = exposure + auto_exposure(wrgb, pixel_solid_angles("latlong", work.size))
@@ -234,7 +260,8 @@ def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
     width = 6 * cell + 7 * pad
     thumb = _thumbnail(envmap, width - 2 * pad)
     thumb_h = thumb.shape[0]
-    views = perspective_views(work, cell)
+    views = perspective_views(work, cell, convention)
+    frame_name = world_frame(convention)[1].upper()
     balls = [("MIRROR BALL", mirror_ball(work, cell).pixels, ("R", "G", "B", "A")),
              ("DIFFUSE BALL", diffuse_ball(work, cell), ("R", "G", "B", "A"))]  # fmt: skip
     height = pad + label + thumb_h + 2 * (pad + label + cell) + pad + label + pad
@@ -247,7 +274,8 @@ def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
             img, names, stops, auto=False, view=view)
 
     own_names = envmap.channels or None
-    place(thumb, own_names, pad, pad, f"{envmap.layout.name.upper()} (AS STORED)")
+    place(thumb, own_names, pad, pad, f"{envmap.layout.name.upper()} (AS STORED)"
+          f"   VIEWS IN {frame_name} AXES")  # fmt: skip
     y = pad + label + thumb_h + pad
     for k, (axis, img) in enumerate(views.items()):
         place(img, work.channels, pad + k * (cell + pad), y, axis)
