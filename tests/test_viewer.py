@@ -234,3 +234,69 @@ def test_rough_ball_is_the_ggx_prefilter_of_an_analytic_map(shoot, tmp_path, rou
     # the lobe is wide enough for the ball to differ from the mirror
     mirror = _ocio_view(_analytic(np.array([[[0.0, 0.0, -1.0]]])), "srgb")[0, 0]
     assert np.abs(mirror - got).max() > 10, (rough, got, mirror)
+
+
+def _camera(axis: str, fov: float, n: int = SIZE) -> np.ndarray:
+    """camera_dirs for a vertical field of view of ``fov`` degrees (square picture)."""
+    forward = np.asarray(LABELS[axis][0], float)
+    return _unit(forward + (camera_dirs(axis, n) / (camera_dirs(axis, n) @ forward)[..., None]
+                            - forward) * np.tan(np.radians(fov) / 2))  # fmt: skip
+
+
+def _unit(d):
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def test_drag_and_wheel_move_the_camera(browser, pattern_page, tmp_path):
+    """Real input events (DevTools Input.dispatchMouseEvent, through Chromium's input pipeline
+    to the page's pointer and wheel handlers): a drag of dx pixels turns the view by
+    dx · fov / height degrees against the drag (the world follows the pointer), a drag down
+    looks up, and the wheel scales the field of view by exp(deltaY / 1000). After each, the
+    screenshot is the analytic pattern seen by that camera."""
+    import OpenImageIO as oiio
+    from cdp import Browser
+
+    flags = [f for f in FLAGS if not f.startswith("--virtual-time")]
+    page = Browser(browser, flags, f"file://{pattern_page}#{RAW}", str(tmp_path / "profile"))
+    try:
+        page.send("Emulation.setDeviceMetricsOverride", width=SIZE, height=SIZE,
+                  deviceScaleFactor=1, mobile=False)  # fmt: skip
+        page.wait_for('document.title.endsWith("(ready)")')
+
+        def drag(x0, y0, x1, y1):
+            page.mouse("mousePressed", x0, y0, button="left", buttons=1, clickCount=1)
+            page.mouse("mouseMoved", (x0 + x1) / 2, (y0 + y1) / 2, button="left", buttons=1)
+            page.mouse("mouseMoved", x1, y1, button="left", buttons=1)
+            page.mouse("mouseReleased", x1, y1, button="left", buttons=0, clickCount=1)
+
+        def camera():
+            return page.evaluate("[state.yaw, state.pitch, state.fov]")
+
+        def shot():
+            path = tmp_path / "shot.png"
+            path.write_bytes(page.screenshot())
+            return oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)[..., :3]
+
+        assert camera() == [0, 0, 90]
+        drag(64, 128, 192, 128)  # 128 px right at fov 90 in 256 px: 45° toward screen left
+        assert camera() == pytest.approx([45, 0, 90])
+        drag(64, 100, 192, 100)
+        assert camera() == pytest.approx([90, 0, 90])  # +X (screen left of +Z, whose right is −X)
+        median, label = _label_error(shot(), camera_dirs("+X", SIZE))
+        assert median < 0.02 and label < BLOCK_LIMIT, ("+X", median, label)
+        drag(192, 128, 0, 128)
+        drag(160, 128, 96, 128)
+        assert camera() == pytest.approx([0, 0, 90])
+        drag(128, 20, 128, 148)  # down 128 px: pull the sky down, look up 45°
+        drag(128, 40, 128, 168)
+        assert camera() == pytest.approx([0, 90, 90])
+        median, label = _label_error(shot(), camera_dirs("+Y", SIZE))
+        assert median < 0.02 and label < BLOCK_LIMIT, ("+Y", median, label)
+        page.mouse("mouseWheel", 128, 128, deltaX=0, deltaY=1000 * np.log(60 / 90))
+        assert camera() == pytest.approx([0, 90, 60], abs=1e-6)
+        median, label = _label_error(shot(), _camera("+Y", 60))
+        assert median < 0.02 and label < BLOCK_LIMIT, ("+Y at 60°", median, label)
+        # the unzoomed view is not what a 60° camera sees: the check can fail
+        assert _label_error(shot(), camera_dirs("+Y", SIZE))[1] > BLOCK_LIMIT
+    finally:
+        page.close()
