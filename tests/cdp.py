@@ -6,6 +6,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+import select
 import subprocess
 import time
 
@@ -18,7 +19,7 @@ class Browser:
     def __init__(self, binary: str, flags, url: str, profile: str, timeout: float = 60.0):
         to_chrome_r, self._out = os.pipe()
         self._in, from_chrome_w = os.pipe()
-        self._deadline = time.monotonic() + timeout
+        self.timeout = timeout  # seconds for each command's reply
 
         def child_fds():  # the pipes at fd 3 (commands) and fd 4 (replies), inheritable;
             # copied above every open fd first, so that neither dup2 clobbers the other pipe
@@ -39,9 +40,10 @@ class Browser:
         attached = self.send("Target.attachToTarget", targetId=pages[0]["targetId"], flatten=True)
         self.session = attached["sessionId"]
 
-    def _read_message(self) -> dict:
+    def _read_message(self, deadline: float) -> dict:
         while b"\0" not in self._buffer:
-            if time.monotonic() > self._deadline:
+            left = deadline - time.monotonic()
+            if left <= 0 or not select.select([self._in], [], [], left)[0]:
                 raise TimeoutError("chromium did not answer in time")
             chunk = os.read(self._in, 1 << 20)
             if not chunk:
@@ -57,8 +59,9 @@ class Browser:
         if self.session is not None and not method.startswith("Target."):
             command["sessionId"] = self.session
         os.write(self._out, json.dumps(command).encode() + b"\0")
+        deadline = time.monotonic() + self.timeout
         while True:
-            reply = self._read_message()
+            reply = self._read_message(deadline)
             if reply.get("id") == self._next:
                 if "error" in reply:
                     raise RuntimeError(f"{method}: {reply['error']}")

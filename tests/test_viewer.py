@@ -4,7 +4,6 @@ against the analytic pattern seen by an independent pinhole camera and OCIO's ow
 from __future__ import annotations
 
 import shutil
-import subprocess
 
 import numpy as np
 import pytest
@@ -16,12 +15,11 @@ from envconv.cli.main import cli
 from envconv.pattern import LABELS, pattern, render_pattern
 from envconv.viewer import build_page, rgbe_decode, rgbe_encode
 
-SIZE = 256  # (headless Chromium lays out at least ~200 px wide: smaller windows crop)
+SIZE = 256  # the page's viewport (Emulation.setDeviceMetricsOverride), square
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
          "--enable-unsafe-swiftshader", "--disable-background-networking",
-         "--disable-component-update", "--disable-sync", "--no-first-run",
-         "--virtual-time-budget=5000")  # fmt: skip
+         "--disable-component-update", "--disable-sync", "--no-first-run")  # fmt: skip
 
 
 @pytest.fixture(scope="module")
@@ -33,21 +31,37 @@ def browser():
 
 
 @pytest.fixture(scope="module")
-def shoot(browser, tmp_path_factory):
+def tab(browser, tmp_path_factory):
+    """One headless Chromium for the module, driven over the DevTools pipe (tests/cdp.py)."""
+    from cdp import Browser
+
+    tab = Browser(browser, FLAGS, "about:blank", str(tmp_path_factory.mktemp("profile")))
+    tab.send("Emulation.setDeviceMetricsOverride", width=SIZE, height=SIZE,
+             deviceScaleFactor=1, mobile=False)  # fmt: skip
+    yield tab
+    tab.close()
+
+
+def _open(tab, page: str, fragment: str) -> None:
+    """Load ``page`` afresh (through about:blank, so a new fragment is a new document, not a
+    hashchange) and wait for its first frame."""
+    tab.send("Page.navigate", url="about:blank")
+    tab.wait_for('document.URL === "about:blank"')
+    tab.send("Page.navigate", url=f"file://{page}#{fragment}")
+    tab.wait_for('document.title.endsWith("(ready)")')
+
+
+@pytest.fixture(scope="module")
+def shoot(tab, tmp_path_factory):
     """Screenshot of a page at a URL fragment, as (H, W, 3) float display values."""
     import OpenImageIO as oiio
 
-    root = tmp_path_factory.mktemp("viewer")
-    count = iter(range(10**6))
+    path = tmp_path_factory.mktemp("shots") / "shot.png"
 
-    def run(page: str, fragment: str, size: int = SIZE) -> np.ndarray:
-        k = next(count)
-        shot = root / f"shot{k}.png"
-        cmd = [browser, *FLAGS, f"--user-data-dir={root / 'profile'}", f"--screenshot={shot}",
-               f"--window-size={size},{size}", f"file://{page}#{fragment}"]  # fmt: skip
-        subprocess.run(cmd, capture_output=True, timeout=120, check=False)
-        assert shot.exists(), f"chromium wrote no screenshot for #{fragment}"
-        return oiio.ImageBuf(str(shot)).get_pixels(oiio.FLOAT)[..., :3]
+    def run(page: str, fragment: str) -> np.ndarray:
+        _open(tab, page, fragment)
+        path.write_bytes(tab.screenshot())
+        return oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)[..., :3]
 
     return run
 
@@ -247,56 +261,48 @@ def _unit(d):
     return d / np.linalg.norm(d, axis=-1, keepdims=True)
 
 
-def test_drag_and_wheel_move_the_camera(browser, pattern_page, tmp_path):
+def test_drag_and_wheel_move_the_camera(tab, pattern_page, tmp_path):
     """Real input events (DevTools Input.dispatchMouseEvent, through Chromium's input pipeline
     to the page's pointer and wheel handlers): a drag of dx pixels turns the view by
     dx · fov / height degrees against the drag (the world follows the pointer), a drag down
     looks up, and the wheel scales the field of view by exp(deltaY / 1000). After each, the
     screenshot is the analytic pattern seen by that camera."""
     import OpenImageIO as oiio
-    from cdp import Browser
 
-    flags = [f for f in FLAGS if not f.startswith("--virtual-time")]
-    page = Browser(browser, flags, f"file://{pattern_page}#{RAW}", str(tmp_path / "profile"))
-    try:
-        page.send("Emulation.setDeviceMetricsOverride", width=SIZE, height=SIZE,
-                  deviceScaleFactor=1, mobile=False)  # fmt: skip
-        page.wait_for('document.title.endsWith("(ready)")')
+    _open(tab, pattern_page, RAW)
 
-        def drag(x0, y0, x1, y1):
-            page.mouse("mousePressed", x0, y0, button="left", buttons=1, clickCount=1)
-            page.mouse("mouseMoved", (x0 + x1) / 2, (y0 + y1) / 2, button="left", buttons=1)
-            page.mouse("mouseMoved", x1, y1, button="left", buttons=1)
-            page.mouse("mouseReleased", x1, y1, button="left", buttons=0, clickCount=1)
+    def drag(x0, y0, x1, y1):
+        tab.mouse("mousePressed", x0, y0, button="left", buttons=1, clickCount=1)
+        tab.mouse("mouseMoved", (x0 + x1) / 2, (y0 + y1) / 2, button="left", buttons=1)
+        tab.mouse("mouseMoved", x1, y1, button="left", buttons=1)
+        tab.mouse("mouseReleased", x1, y1, button="left", buttons=0, clickCount=1)
 
-        def camera():
-            return page.evaluate("[state.yaw, state.pitch, state.fov]")
+    def camera():
+        return tab.evaluate("[state.yaw, state.pitch, state.fov]")
 
-        def shot():
-            path = tmp_path / "shot.png"
-            path.write_bytes(page.screenshot())
-            return oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)[..., :3]
+    def shot():
+        path = tmp_path / "shot.png"
+        path.write_bytes(tab.screenshot())
+        return oiio.ImageBuf(str(path)).get_pixels(oiio.FLOAT)[..., :3]
 
-        assert camera() == [0, 0, 90]
-        drag(64, 128, 192, 128)  # 128 px right at fov 90 in 256 px: 45° toward screen left
-        assert camera() == pytest.approx([45, 0, 90])
-        drag(64, 100, 192, 100)
-        assert camera() == pytest.approx([90, 0, 90])  # +X (screen left of +Z, whose right is −X)
-        median, label = _label_error(shot(), camera_dirs("+X", SIZE))
-        assert median < 0.02 and label < BLOCK_LIMIT, ("+X", median, label)
-        drag(192, 128, 0, 128)
-        drag(160, 128, 96, 128)
-        assert camera() == pytest.approx([0, 0, 90])
-        drag(128, 20, 128, 148)  # down 128 px: pull the sky down, look up 45°
-        drag(128, 40, 128, 168)
-        assert camera() == pytest.approx([0, 90, 90])
-        median, label = _label_error(shot(), camera_dirs("+Y", SIZE))
-        assert median < 0.02 and label < BLOCK_LIMIT, ("+Y", median, label)
-        page.mouse("mouseWheel", 128, 128, deltaX=0, deltaY=1000 * np.log(60 / 90))
-        assert camera() == pytest.approx([0, 90, 60], abs=1e-6)
-        median, label = _label_error(shot(), _camera("+Y", 60))
-        assert median < 0.02 and label < BLOCK_LIMIT, ("+Y at 60°", median, label)
-        # the unzoomed view is not what a 60° camera sees: the check can fail
-        assert _label_error(shot(), camera_dirs("+Y", SIZE))[1] > BLOCK_LIMIT
-    finally:
-        page.close()
+    assert camera() == [0, 0, 90]
+    drag(64, 128, 192, 128)  # 128 px right at fov 90 in 256 px: 45° toward screen left
+    assert camera() == pytest.approx([45, 0, 90])
+    drag(64, 100, 192, 100)
+    assert camera() == pytest.approx([90, 0, 90])  # +X (screen left of +Z, whose right is −X)
+    median, label = _label_error(shot(), camera_dirs("+X", SIZE))
+    assert median < 0.02 and label < BLOCK_LIMIT, ("+X", median, label)
+    drag(192, 128, 0, 128)
+    drag(160, 128, 96, 128)
+    assert camera() == pytest.approx([0, 0, 90])
+    drag(128, 20, 128, 148)  # down 128 px: pull the sky down, look up 45°
+    drag(128, 40, 128, 168)
+    assert camera() == pytest.approx([0, 90, 90])
+    median, label = _label_error(shot(), camera_dirs("+Y", SIZE))
+    assert median < 0.02 and label < BLOCK_LIMIT, ("+Y", median, label)
+    tab.mouse("mouseWheel", 128, 128, deltaX=0, deltaY=1000 * np.log(60 / 90))
+    assert camera() == pytest.approx([0, 90, 60], abs=1e-6)
+    median, label = _label_error(shot(), _camera("+Y", 60))
+    assert median < 0.02 and label < BLOCK_LIMIT, ("+Y at 60°", median, label)
+    # the unzoomed view is not what a 60° camera sees: the check can fail
+    assert _label_error(shot(), camera_dirs("+Y", SIZE))[1] > BLOCK_LIMIT
