@@ -184,14 +184,20 @@ def diffuse_ball(work: EnvMap, size: int = 256) -> np.ndarray:
 
 def _range_and_nans(envmap: EnvMap) -> tuple[float, float, int]:
     """(min, max) of the finite colour values and the NaN count of every channel, read in
-    bands of rows so a 16K map needs no full-size temporary."""
+    bands of rows so a 16K map needs no full-size temporary. A band whose min and max are
+    finite has neither NaN nor Inf (both propagate or are extreme), so it takes two passes."""
     names = [c.upper() for c in envmap.channels] or ["R", "G", "B"]
     cols = [k for k, c in enumerate(names) if c != "A"][:3] or [0]
+    every = cols == list(range(envmap.pixels.shape[2]))
     lo, hi, nans = np.inf, -np.inf, 0
     for start in range(0, envmap.pixels.shape[0], 256):
         band = envmap.pixels[start : start + 256]
+        rgb = band if every else band[..., cols]
+        b_lo, b_hi = float(rgb.min()), float(rgb.max())
+        if every and np.isfinite(b_lo) and np.isfinite(b_hi):
+            lo, hi = min(lo, b_lo), max(hi, b_hi)
+            continue
         nans += int(np.count_nonzero(np.isnan(band)))
-        rgb = band[..., cols]
         finite = np.isfinite(rgb)
         values = rgb if finite.all() else rgb[finite]
         if values.size:
@@ -231,15 +237,19 @@ def _stats_line(s: dict) -> str:
 
 def _thumbnail(envmap: EnvMap, max_width: int) -> np.ndarray:
     """The map's own pixels, box-averaged by an integer factor to at most ``max_width``
-    (in bands of rows, so a 16K map needs no full-size temporary)."""
+    (in bands of rows, so a 16K map needs no full-size temporary; rows are summed first,
+    which adds whole contiguous rows, then columns of the step times smaller result)."""
     step = max(1, -(-envmap.pixels.shape[1] // max_width))
     h, w = (np.array(envmap.pixels.shape[:2]) // step) * step
-    band = step * max(1, 64 // step)
+    c = envmap.pixels.shape[2]
+    band = step * max(1, 256 // step)
     out = []
     for start in range(0, h, band):
         px = envmap.pixels[start : min(start + band, h), :w]
         rows = px.shape[0] // step
-        out.append(px.reshape(rows, step, w // step, step, -1).mean(axis=(1, 3), dtype=np.float32))
+        acc = px.reshape(rows, step, w * c).sum(axis=1, dtype=np.float64)
+        acc = acc.reshape(rows, w // step, step, c).sum(axis=2)
+        out.append((acc / (step * step)).astype(np.float32))
     return np.concatenate(out, axis=0)
 
 

@@ -321,3 +321,17 @@ def test_preview_cli_convention(tmp_path):
     result = runner.invoke(cli, ["preview", str(src), "-o", str(tmp_path / "x.png"), "--convention", "blendr"])
     assert result.exit_code == 2 and "did you mean blender" in result.output
     assert len(result.output.strip().splitlines()) == 1
+
+
+def test_thumbnail_is_the_box_average_and_range_skips_non_finite():
+    from envconv.preview import _range_and_nans, _thumbnail
+
+    rng = np.random.default_rng(5)
+    px = rng.uniform(-1, 5, (530, 1060, 3)).astype(np.float32)  # not a multiple of the step
+    env = envconv.EnvMap(px, "latlong")
+    thumb = _thumbnail(env, 100)  # step 11: 48 × 96 blocks of 11 × 11
+    want = px[: 48 * 11, : 96 * 11].astype(np.float64).reshape(48, 11, 96, 11, 3).mean(axis=(1, 3))
+    assert thumb.shape == (48, 96, 3) and np.allclose(thumb, want, atol=1e-5)
+    assert _range_and_nans(env) == (float(px.min()), float(px.max()), 0)
+    px[300, 7, 1], px[400, 9, 0], px[5, 5, 2] = np.inf, np.nan, -np.inf
+    assert _range_and_nans(env) == (float(px[np.isfinite(px)].min()), float(px[np.isfinite(px)].max()), 1)
