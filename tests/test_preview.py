@@ -335,3 +335,19 @@ def test_thumbnail_is_the_box_average_and_range_skips_non_finite():
     assert _range_and_nans(env) == (float(px.min()), float(px.max()), 0)
     px[300, 7, 1], px[400, 9, 0], px[5, 5, 2] = np.inf, np.nan, -np.inf
     assert _range_and_nans(env) == (float(px[np.isfinite(px)].min()), float(px[np.isfinite(px)].max()), 1)
+
+
+def test_a_large_lat_long_is_box_averaged_first_and_still_right():
+    """A 2560-high lat-long (over 4 × WORK_HEIGHT: box-averaged by 2 before resampling) of a
+    smooth analytic sky: the working lat-long holds the sky at its pixel centres."""
+    from envconv.preview import WORK_HEIGHT
+
+    def sky(d):
+        return np.stack([1 + 0.5 * d[..., 0], 1 + 0.3 * d[..., 1] ** 2, 1 - 0.4 * d[..., 2]], -1)
+
+    height = 5 * WORK_HEIGHT
+    env = envconv.EnvMap(sky(envconv.geometry.pixel_directions("latlong", height)[0]).astype(np.float32), "latlong")
+    work = working_map(env)
+    assert work.pixels.shape == (WORK_HEIGHT, 2 * WORK_HEIGHT, 3)
+    want = sky(envconv.geometry.pixel_directions("latlong", WORK_HEIGHT)[0])
+    assert np.abs(work.pixels - want).max() < 2e-3
