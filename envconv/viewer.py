@@ -5,7 +5,8 @@ the map, its irradiance and the display transforms are embedded in it as JSON.
 
 - **Map**: the input resampled to envconv's lat-long (envconv's frame, CONVENTIONS.md), at
   most ``CAP_HEIGHT`` × 2·``CAP_HEIGHT`` (2048 × 1024), as Radiance RGBE bytes in base64
-  (negative and non-finite values become 0). **Irradiance**: a 32 × 64 lat-long of E/π
+  (negative and non-finite values become 0); :func:`envconv.preview.working_map` makes it, so a
+  lat-long over four times the cap is box-averaged by an integer factor first. **Irradiance**: a 32 × 64 lat-long of E/π
   (``irradiance=True``), lighting the diffuse ball. **GGX levels**: the split-sum GGX
   prefilter of :mod:`envconv.ibl` at the perceptual roughness of ``GGX_LEVELS`` (α = r²), each
   a small lat-long (``mips="ggx:2"`` level 1: 128 × 64 for r = 0.25, 64 × 32 above, about
@@ -114,9 +115,13 @@ def _embedded(env: EnvMap) -> dict:
 
 def ggx_page_levels(work: EnvMap) -> list[EnvMap]:
     """The GGX-prefiltered lat-longs of ``work`` embedded for the rough ball, one per
-    :data:`GGX_LEVELS` entry (level 1 of a ``mips="ggx:2"`` chain with that roughness)."""
+    :data:`GGX_LEVELS` entry (level 1 of a ``mips="ggx:2"`` chain with that roughness),
+    prefiltered from ``work`` resampled to at most 512 high (0.35° pixels, fine for lobes of
+    r ≥ 0.25; half the time of a 1024-high source, and within 1% of it)."""
     from .resample import convert
 
+    if work.pixels.shape[0] > 512:
+        work = convert(work, "latlong", size=512)
     out = []
     for rough, height in GGX_LEVELS:
         chain = convert(work, "latlong", size=height, mips="ggx:2", roughness=[rough])
@@ -131,12 +136,10 @@ def build_page(envmap: EnvMap, title: str = "", in_convention=None, cap: int = C
     height cap of the embedded lat-long.
     """
     from .geometry import pixel_solid_angles
-    from .preview import auto_exposure
+    from .preview import auto_exposure, working_map
     from .resample import convert
-    from .sampling import default_size
 
-    size = min(cap, default_size(envmap, "latlong"))
-    work = convert(envmap, "latlong", size=size, in_convention=in_convention)
+    work = working_map(envmap, in_convention, cap)
     irr = convert(work, "latlong", size=32, irradiance=True)
     stops = auto_exposure(work.pixels[..., :3], pixel_solid_angles("latlong", work.size))
     data = {
