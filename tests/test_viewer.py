@@ -222,19 +222,25 @@ PAGE_LIMIT = 2.0
 LEVEL_LIMIT = 0.02
 
 
-@pytest.mark.parametrize("rough", [0.25, 0.375, 0.5, 1.0])
-def test_rough_ball_is_the_ggx_prefilter_of_an_analytic_map(shoot, tmp_path, rough):
-    """Camera along +Z: the rough ball's centre faces it and reflects −Z, so it shows the GGX
-    lobe about −Z: Python's prefiltered levels there (interpolated linearly in roughness
-    between levels), and those agree with a brute-force integral over the sphere."""
+@pytest.fixture(scope="module")
+def analytic_page(tmp_path_factory):
+    """(page, the Python GGX levels read at −Z by roughness) of the analytic sky."""
     from envconv.viewer import GGX_LEVELS, ggx_page_levels
 
     d = envconv.geometry.pixel_directions("latlong", 256)[0]
     env = envconv.EnvMap(_analytic(d).astype(np.float32), "latlong")
-    page = _page(tmp_path, env)
-    shot = shoot(page, f"view=+Z&labels=0&ui=0&tone=0&exposure=0&rough={rough}")
     levels = zip(GGX_LEVELS, ggx_page_levels(env), strict=True)
     values = {r: _level_at_minus_z(level.pixels) for (r, _), level in levels}
+    return _page(tmp_path_factory.mktemp("analytic"), env), values
+
+
+@pytest.mark.parametrize("rough", [0.25, 0.375, 0.5, 1.0])
+def test_rough_ball_is_the_ggx_prefilter_of_an_analytic_map(shoot, analytic_page, rough):
+    """Camera along +Z: the rough ball's centre faces it and reflects −Z, so it shows the GGX
+    lobe about −Z: Python's prefiltered levels there (interpolated linearly in roughness
+    between levels), and those agree with a brute-force integral over the sphere."""
+    page, values = analytic_page
+    shot = shoot(page, f"view=+Z&labels=0&ui=0&tone=0&exposure=0&rough={rough}")
     rs = sorted(values)
     k = max(i for i, r in enumerate(rs) if r <= rough)
     t = 0.0 if rs[k] == rough else (rough - rs[k]) / (rs[k + 1] - rs[k])
