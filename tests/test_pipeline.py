@@ -208,8 +208,16 @@ def test_failure_reports_what_was_written(sky, tmp_path):
         Resample("sphere", size=8),
         Write(tmp_path / "ok.exr"),
         Resample("sphere", size=8),
-        Write(tmp_path / "bad.unknownext"),
+        Write(tmp_path / "missing" / "bad.exr", makedirs=False),  # fails only when written
     ]
     with pytest.raises(envconv.EnvconvError):
         Pipeline(steps).run(written=written)
     assert written == [str(tmp_path / "ok.exr")]
+
+
+def test_bad_output_settings_fail_before_any_file_is_written(sky, tmp_path):
+    steps = [Read(sky), Resample("sphere", size=8), Write(tmp_path / "ok.exr"),
+             Resample("sphere", size=8), Write(tmp_path / "bad.unknownext")]  # fmt: skip
+    with pytest.raises(envconv.EnvconvError):
+        Pipeline(steps).run()
+    assert not (tmp_path / "ok.exr").exists()
