@@ -48,23 +48,20 @@ def _keys(path: str) -> list:
     return [*keys, (stat.st_dev, stat.st_ino)]
 
 
-def check_outputs(outputs: Iterable[tuple[str, bool]], inputs: Iterable[str],
-                  owners: dict[str, str] | None = None) -> None:  # fmt: skip
+def check_outputs(outputs: Iterable[tuple], inputs: Iterable[str]) -> None:
     """Refuse, with UsageError, a run that breaks the policy of this module.
 
     Parameters
     ----------
-    outputs : iterable of (path, no_clobber)
-        Every file the run writes, and whether it must not exist yet.
+    outputs : iterable of (path, no_clobber) or (path, no_clobber, owner)
+        Every file the run writes, whether it must not exist yet, and optionally what writes
+        it (a batch job's input, named when two jobs would write one file).
     inputs : iterable of str
         Every file the run reads.
-    owners : dict, optional
-        Output path → what writes it (a batch job's input), for the message about two
-        outputs on one path.
     """
     read = {key: path for path in dict.fromkeys(inputs) for key in _keys(path)}
     written: dict = {}
-    for path, no_clobber in outputs:
+    for path, no_clobber, *owner in outputs:
         keys = _keys(path)
         source = next((read[k] for k in keys if k in read), None)
         if source is not None:
@@ -72,11 +69,10 @@ def check_outputs(outputs: Iterable[tuple[str, bool]], inputs: Iterable[str],
                              "inputs: choose another output path")  # fmt: skip
         other = next((written[k] for k in keys if k in written), None)
         if other is not None:
-            who = ""
-            if owners and owners.get(other) != owners.get(path):
-                who = f" (by {owners.get(other)} and by {owners.get(path)})"
-            raise UsageError(f"{path} would be written twice in one run{who}; give each "
-                             "output its own path (e.g. with {stem} or {layout})")  # fmt: skip
+            hint = "give each output its own path (e.g. with {stem} or {layout})"
+            if owner and other[1] and owner[0] != other[1][0]:
+                raise UsageError(f"{other[1][0]} and {owner[0]} would both write {path}; {hint}")
+            raise UsageError(f"{path} would be written twice in one run; {hint}")
         if no_clobber and os.path.lexists(path):
             raise UsageError(f"{path} exists and -n/--no-clobber keeps it; remove it or drop -n")
-        written.update(dict.fromkeys(keys, path))
+        written.update(dict.fromkeys(keys, (path, owner)))

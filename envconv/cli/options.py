@@ -16,6 +16,7 @@ from ..resample import FILTERS
 
 __all__ = [
     "refuse_overwrite",
+    "no_clobber_option",
     "layout_choice",
     "read_options",
     "resample_options",
@@ -162,3 +163,7 @@ def refuse_overwrite(input_path: str, output_path: str) -> None:
     inputs = glob.glob(glob.escape(input_path).replace("{face}", "*")) if "{face}" in input_path else []
     if os.path.abspath(output_path) in {os.path.abspath(p) for p in [input_path, *inputs]}:
         raise click.UsageError(f"{output_path} would overwrite the input")
+
+
+#: ``-n/--no-clobber`` of convert, write, run and batch (the output policy: envconv.outputs).
+no_clobber_option = click.option("-n", "--no-clobber", "no_clobber", is_flag=True, help="Refuse, before any work, to replace an output that exists (by default it is replaced atomically).")  # fmt: skip
