@@ -74,12 +74,13 @@ def plan_convert(
     """
     from .color import WORKING_COLORSPACE, input_colorspace_of
     from .io.encode import plan_output
+    from .io.face_files import first_file
 
     read, write, color = dict(read or {}), dict(write or {}), dict(color or {})
     resample = dict(resample or {})
     output = convert_pipeline(input_path, output_path, read, resample, write, color).plan()[0]
     route_face_sets(input_path, read, resample, write)
-    first = _first_file(os.fspath(input_path), read.get("layout"), read.get("faces"))
+    first = first_file(input_path, read.get("layout"), read.get("faces"))
     level, part = int(read.get("level", 0) or 0), read.get("part")
     _, _, channels, metadata = io.read_header(first, level, part)
     pixel_type = io.read_pixel_type(first, part)
@@ -101,15 +102,6 @@ def plan_convert(
         "compression": plan.compression, "input_colorspace": source,
         "working_colorspace": working, "output_colorspace": plan.colorspace,
     }  # fmt: skip
-
-
-def _first_file(path: str, layout: str | None, faces=None) -> str:
-    """The file whose header stands for a (possibly ``{face}``) input path."""
-    if "{face}" not in path:
-        return path
-    from .io.face_files import find_face_files
-
-    return find_face_files(path, layout, faces).paths[0]
 
 
 def route_face_sets(input_path, read: dict, resample: dict, write: dict) -> None:

@@ -24,18 +24,15 @@ __all__ = ["input_files", "check_outputs"]
 
 
 def input_files(path: str | os.PathLike, layout: str | None = None, faces=None) -> list[str]:
-    """The files an input path stands for: itself, or every file of a ``{face}`` set found."""
-    path = os.fspath(path)
-    if "{face}" not in path:
-        return [path]
-    from .io.face_files import find_face_files
+    """The files an input path stands for (:func:`envconv.io.face_files.files_of`); none for
+    an incomplete ``{face}`` set, which fails when read and has no file to protect here."""
+    from .errors import EnvconvError
+    from .io.face_files import files_of
 
     try:
-        return list(find_face_files(path, layout, faces).paths)
-    except Exception:  # an incomplete set fails when read; here it has no files to protect
-        import glob
-
-        return glob.glob(glob.escape(path).replace("{face}", "*"))
+        return files_of(path, layout, faces)
+    except EnvconvError:
+        return []
 
 
 def _keys(path: str) -> list:

@@ -156,13 +156,15 @@ def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
 
 
 def refuse_overwrite(input_path: str, output_path: str) -> None:
-    """Usage error (exit 2) when ``output_path`` is the input, or one file of a ``{face}`` input."""
-    import glob
-    import os
+    """Usage error when ``output_path`` is the input, or one file of a ``{face}`` input, also
+    through a link (the output policy of :mod:`envconv.outputs`)."""
+    from ..errors import UsageError
+    from ..outputs import check_outputs, input_files
 
-    inputs = glob.glob(glob.escape(input_path).replace("{face}", "*")) if "{face}" in input_path else []
-    if os.path.abspath(output_path) in {os.path.abspath(p) for p in [input_path, *inputs]}:
-        raise click.UsageError(f"{output_path} would overwrite the input")
+    try:
+        check_outputs([(output_path, False)], input_files(input_path))
+    except UsageError as exc:
+        raise click.UsageError(str(exc)) from None
 
 
 #: ``-n/--no-clobber`` of convert, write, run and batch (the output policy: envconv.outputs).
