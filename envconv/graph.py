@@ -39,6 +39,7 @@ from .layouts import get_layout
 from .pipeline import Colorspace, Exposure, Pipeline, Read, Resample, Rotate, Step, Write
 from .prepare import FIX_MODES
 from .resample import FILTERS, convert
+from .sampling import check_guard, check_mips, check_samples
 from .steps import PREPARE_OPTIONS, check_variables
 
 __all__ = ["Graph", "load_graph", "parse_graph", "STEP_KEYS", "CHECKS"]
@@ -259,15 +260,13 @@ def _convention(value: Any) -> str | None:
     return None
 
 
-def _mips(value: Any) -> str | None:
-    if isinstance(value, bool) or (_is_int(value) and value >= 0):
-        return None
-    if isinstance(value, str):
-        name, _, count = value.partition(":")
-        if (name in ("box", "ggx") and (not count or (count.isdigit() and int(count) >= 1))
-                or value == "all"):  # fmt: skip
-            return None
-    return "true, false, a number of levels, 'all', 'box[:K]' or 'ggx[:K]'"
+def _passes(check, value: Any) -> bool:
+    """Whether one of :mod:`envconv.sampling`'s checks (the one home of the rule) takes it."""
+    try:
+        check(value)
+    except EnvconvError:
+        return False
+    return True
 
 
 def _compression(value: Any) -> str | None:
@@ -312,14 +311,16 @@ CHECKS: dict[str, Any] = {
     "level": lambda v: None if _is_int(v) and v >= 0 else "a non-negative integer",
     "part": lambda v: None if (_is_int(v) and v >= 0) or (isinstance(v, str) and v) else
     "a part name or index",
-    "samples": lambda v: None if v == "auto" or (_is_int(v) and 1 <= v <= 64) else
+    "samples": lambda v: None if v == "auto" or _is_int(v) and _passes(check_samples, v) else
     "1..64 or 'auto'",
     "filter": _choice(*FILTERS),
-    "guard": lambda v: None if v == "fill" or (_is_int(v) and v >= 0) else
+    "guard": lambda v: None if v == "fill" or _is_int(v) and _passes(check_guard, v) else
     "a non-negative integer or 'fill'",
     "alpha": _BOOL, "makedirs": _BOOL, "dither": _BOOL, "irradiance": _BOOL,
     "clamp_negative": _BOOL, "no_clobber": _BOOL,
-    "mips": _mips, "roughness": _roughness, "up": _choice("y", "z"),
+    "mips": lambda v: None if isinstance(v, (bool, int, str)) and _passes(check_mips, v) else
+    "true, false, a number of levels, 'all', 'box[:K]' or 'ggx[:K]'",
+    "roughness": _roughness, "up": _choice("y", "z"),
     "in_convention": _convention, "out_convention": _convention, "faces": _face_set,
     "stops": _NUMBER, "yaw": _NUMBER, "pitch": _NUMBER, "roll": _NUMBER, "exposure": _NUMBER,
     "angles": _angles, "rotate": _angles,

@@ -286,19 +286,14 @@ def compose_rotations(first, second):
 
 
 def count_levels(width: int, height: int, mips: Any) -> int:
-    """MIP levels of a ``width`` × ``height`` file for ``mips`` as ``Resample`` takes it.
-
-    None or False: 1. True, 0, "all", "box" or "ggx": the full round-down chain to 1×1
-    (:func:`envconv.mips.full_level_count`). K, "box:K" or "ggx:K": at most K levels.
-    """
+    """MIP levels of a ``width`` × ``height`` file for ``mips`` as ``Resample`` takes it
+    (:func:`envconv.sampling.check_mips`): 1 without a chain, else at most the full
+    round-down chain to 1×1 (:func:`envconv.mips.full_level_count`)."""
     from .mips import full_level_count
+    from .sampling import check_mips
 
-    if mips is None or mips is False:
+    levels = check_mips(mips)[0]
+    if levels is None:
         return 1
     full = full_level_count(width, height)
-    if isinstance(mips, str):
-        count = mips.partition(":")[2]
-        mips = int(count) if count.isdigit() else True
-    if mips is True or int(mips) == 0:
-        return full
-    return max(1, min(int(mips), full))
+    return full if levels is True else min(levels, full)
