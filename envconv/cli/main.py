@@ -176,6 +176,9 @@ def cli(verbose: int, threads: int | None) -> None:
 
     Chained steps: read, rotate, exposure, colorspace, resample, write. Each resample starts
     from the source (the last read and the steps that follow it), never from another output.
+    Before any work a run is refused if an output is an input (also through a link) or two
+    outputs share a path, and with -n (convert, write, run, batch) if an output exists;
+    otherwise outputs are replaced atomically (docs/shell.md).
     Options of envconv itself (-v, --threads) come before the command:
     envconv --threads 1 convert ...
     """
