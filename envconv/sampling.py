@@ -9,6 +9,7 @@ them). Sizes are characteristic sizes N; pitches are those of :func:`envconv.geo
 from __future__ import annotations
 
 import math
+import numbers
 
 from .conventions import resolve_convention
 from .envmap import EnvMap
@@ -85,6 +86,6 @@ def check_mips(mips) -> tuple[bool | int | None, bool]:
             return (int(count) if colon else True), name == "ggx"
         raise UsageError(f"mips must be a number of levels, 'all', 'box[:K]' or 'ggx[:K]' "
                          f"(K >= 1), got {mips!r}")  # fmt: skip
-    if isinstance(mips, int) and mips >= 0:
-        return (True if mips == 0 else mips), False
+    if isinstance(mips, numbers.Integral) and mips >= 0:
+        return (True if mips == 0 else int(mips)), False
     raise UsageError(f"mips must be True or a number of levels, got {mips!r}")
