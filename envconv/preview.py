@@ -174,6 +174,8 @@ def diffuse_ball(work: EnvMap, size: int = 256) -> np.ndarray:
     A pixel of normal n shows the irradiance E(n)/π (envconv's ``irradiance=True``, a 32-high
     lat-long read bilinearly); alpha is 1 on the disk, 0 outside.
     """
+    from . import kernels
+    from .geometry import kernel_geometry
     from .resample import convert
 
     irr = convert(work, "latlong", size=32, irradiance=True)
@@ -184,14 +186,12 @@ def diffuse_ball(work: EnvMap, size: int = 256) -> np.ndarray:
     u, v = dir_to_uv("latlong", normals, 32)
     rgb, _ = _rgb_alpha(irr.pixels, irr.channels)
     h, w = rgb.shape[:2]
-    fx, fy = u * w - 0.5, np.clip(v * h - 0.5, 0.0, h - 1.0)
-    x0, y0 = np.floor(fx).astype(int), np.minimum(np.floor(fy).astype(int), h - 2)
-    tx, ty = (fx - x0)[..., None], (fy - y0)[..., None]
-    x0, x1 = x0 % w, (x0 + 1) % w  # the lat-long wraps in u
-    top = rgb[y0, x0] * (1 - tx) + rgb[y0, x1] * tx
-    bottom = rgb[y0 + 1, x0] * (1 - tx) + rgb[y0 + 1, x1] * tx
+    points = np.stack([u * w, v * h], axis=-1).reshape(-1, 2)  # image points, pixel units
+    # The core's seam-aware bilinear tap (wraps in u, continues over the poles).
+    shade = kernels.filtered_reads(rgb, kernel_geometry("latlong", 32), [0], points,
+                                   kernels.FILTER_BILINEAR)  # fmt: skip
     out = np.zeros((size, size, 4), np.float32)
-    out[..., :3] = top * (1 - ty) + bottom * ty
+    out[..., :3] = shade.reshape(size, size, 3)
     out[..., 3] = r2 <= 1.0
     return out
 

@@ -236,7 +236,7 @@ def test_convert_preview_never_overwrites_the_output(tmp_path):
     out = tmp_path / "out.png"
     result = CliRunner().invoke(cli, ["convert", str(src), str(out), "--to", "latlong",
                                       "--preview", str(out)])  # fmt: skip
-    assert result.exit_code != 0 and "--preview" in result.output and not out.exists()
+    assert result.exit_code != 0 and "written twice" in result.output and not out.exists()
 
 
 def test_stats_count_nans_and_find_the_brightest_direction():

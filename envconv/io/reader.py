@@ -192,11 +192,9 @@ def mip_levels(path: str | os.PathLike, part: str | None = None) -> list[tuple[i
 
     Multi-file layouts (``{face}`` in the path) report the levels of their first file.
     """
-    path = os.fspath(path)
-    if "{face}" in path:
-        from .face_files import find_face_files
+    from .face_files import first_file
 
-        path = find_face_files(path).paths[0]
+    path = first_file(path)
     index = read_file_header(path, 0, part).chosen[0]
     with _open_input(path) as inp:
         sizes: list[tuple[int, int]] = []
