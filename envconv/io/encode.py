@@ -120,16 +120,13 @@ def encode_output(
     levels = envmap.levels if envmap.levels is not None else [envmap.pixels]
     out = []
     for k, level in enumerate(levels):
-        pixels = color.convert_keeping_nonfinite(level, plan.source_colorspace, plan.colorspace, config)
-        if plan.format == "hdr":
-            pixels, n_neg = _clamp_for_rgbe(pixels)
-            if n_neg and k == 0:
-                warnings.append(
-                    f"{where}: Radiance HDR cannot store negative values; "
-                    f"{_percent(n_neg, pixels.shape[0] * pixels.shape[1])} of pixels had "
-                    "negative values set to 0 (write EXR or float TIFF to keep them)"
-                )
-        codes, report = quantize.quantize(pixels, plan.pixel_type, dither=dither)
+        codes, report, n_neg = _encode_level(level, plan, config, dither)
+        if k == 0 and n_neg:
+            warnings.append(
+                f"{where}: Radiance HDR cannot store negative values; "
+                f"{_percent(n_neg, level.shape[0] * level.shape[1])} of pixels had "
+                "negative values set to 0 (write EXR or float TIFF to keep them)"
+            )
         if k == 0 and report.message():
             warnings.append(f"{where}: {report.message()}")
         out.append(codes)
@@ -149,6 +146,39 @@ def encode_output(
     if plan.format == "openexr" and primaries and "chromaticities" not in metadata:
         metadata["chromaticities"] = _CHROMATICITIES[primaries.group(1)]
     return Encoded(out, plan, metadata, warnings)
+
+#: Bytes of float32 pixels encoded at a time: colour conversion and quantisation make their
+#: temporaries for one block of rows, never for a whole level (see docs/memory.md).
+ENCODE_BLOCK_BYTES = 1 << 22
+
+
+def _encode_level(level: np.ndarray, plan: OutputPlan, config, dither: bool):
+    """(codes, clip report, pixels with negatives zeroed for RGBE) of one level, encoded block
+    of rows by block into one array of the stored type. A float level that needs no colour
+    conversion is returned as it is (no copy)."""
+    level = quantize.as_image(level)
+    converts = color.resolve_colorspace(config, plan.source_colorspace) != color.resolve_colorspace(
+        config, plan.colorspace)  # fmt: skip
+    if plan.pixel_type == "float" and plan.format != "hdr" and not converts:
+        codes, report = quantize.quantize(level, "float")
+        return codes, report, 0
+    height, width, nch = level.shape
+    rows = max(1, ENCODE_BLOCK_BYTES // max(1, width * nch * 4))
+    codes, reports, n_neg = None, [], 0
+    for y0 in range(0, height, rows):
+        block = color.convert_keeping_nonfinite(level[y0 : y0 + rows], plan.source_colorspace,
+                                                plan.colorspace, config)  # fmt: skip
+        if plan.format == "hdr":
+            block, n = _clamp_for_rgbe(block)
+            n_neg += n
+        done, report = quantize.quantize(block, plan.pixel_type, dither=dither,
+                                         start=y0 * width * nch)  # fmt: skip
+        if codes is None:
+            codes = np.empty((height, width, nch), done.dtype)
+        codes[y0 : y0 + rows] = done
+        reports.append(report)
+    return codes, quantize.merge_reports(reports), n_neg
+
 
 def _clamp_for_rgbe(pixels: np.ndarray) -> tuple[np.ndarray, int]:
     """Zero negative colour values (RGBE has no sign); return the pixels and how many had one."""
