@@ -59,7 +59,8 @@ from .sampling import (
     default_size,
 )
 
-__all__ = ["convert", "default_size", "auto_samples", "source_rips", "FILTERS", "MAX_SAMPLES"]
+__all__ = ["convert", "default_size", "auto_samples", "source_rips", "memory_needed", "FILTERS",
+           "MAX_SAMPLES"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -137,6 +138,7 @@ def convert(
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
+    _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
     if envmap.valid is not None or envmap.parts:
         from .sourcemap import convert_with_holes
 
@@ -250,6 +252,47 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
         pixel_type=envmap.pixel_type,
         levels=[o for o, _ in chain] if mips else None,
     )
+
+
+def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False,
+                  samples="auto", filter="bilinear", out_convention=None) -> int | None:  # fmt: skip
+    """Estimated peak bytes of :func:`convert` with these arguments and of writing its result
+    (:func:`envconv.memory.estimate_convert`); None for arguments :func:`convert` refuses."""
+    from . import memory
+
+    try:
+        layout = get_layout(to)
+        chain, _ = _mip_filter(mips)
+        if size is None:
+            size = default_size(envmap, layout, resolve_convention(out_convention, layout))
+        guard_px = 0 if guard == "fill" else check_guard(guard)
+    except (UsageError, LayoutError, ValueError, TypeError):
+        return None
+    if not isinstance(size, (int, np.integer)) or size < 1:
+        return None
+    rips = 0
+    if check_samples(samples) is None and filter == "bilinear" and envmap.layout.name == "latlong" \
+            and not envmap.guard:  # fmt: skip
+        height, width, nch = envmap.pixels.shape
+        levels = kernels.rip_level_count(width)
+        rows = min(height, 2 * rip_rows(width, height, layout, int(size))) if levels else 0
+        rips = rows * (width - (width >> levels)) * (nch + int(envmap.valid is not None)) * 4
+    return memory.estimate_convert(envmap, layout, int(size), guard_px, chain, alpha, rips)
+
+
+def _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention):
+    """Refuse, before allocating, a conversion whose estimated peak memory exceeds what is
+    available (:mod:`envconv.memory`); bad arguments are left for :func:`_resample` to name."""
+    from . import memory
+
+    try:
+        need = memory_needed(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
+    except (UsageError, LayoutError):
+        return
+    if need is not None:
+        name = get_layout(to).name
+        memory.check(need, f"converting to {name} at size {size or 'default'}",
+                     envmap.pixels.nbytes, "lower --size, or free memory")  # fmt: skip
 
 
 def _mip_filter(mips):

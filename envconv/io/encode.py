@@ -118,6 +118,7 @@ def encode_output(
     where = os.fspath(path)
     warnings: list[str] = []
     levels = envmap.levels if envmap.levels is not None else [envmap.pixels]
+    _check_memory(levels, plan, config, where)
     out = []
     for k, level in enumerate(levels):
         codes, report, n_neg = _encode_level(level, plan, config, dither)
@@ -152,14 +153,29 @@ def encode_output(
 ENCODE_BLOCK_BYTES = 1 << 22
 
 
+def _check_memory(levels: list[np.ndarray], plan: OutputPlan, config, where: str) -> None:
+    """Refuse, before encoding, when the encoded copy of the levels cannot fit in memory."""
+    from .. import memory
+
+    held = sum(level.nbytes for level in levels)
+    copy = _converts(plan, config) or plan.format == "hdr"
+    share = {"float": 4 if copy else 0, "half": 2, "uint16": 2, "uint8": 1}.get(plan.pixel_type, 4)
+    memory.check(held + held * share // 4 + ENCODE_BLOCK_BYTES, f"writing {where}", held,
+                 "write fewer levels or a smaller --size, or free memory")  # fmt: skip
+
+
+def _converts(plan: OutputPlan, config) -> bool:
+    """Whether writing converts colour (the source and output spaces differ)."""
+    return color.resolve_colorspace(config, plan.source_colorspace) != color.resolve_colorspace(
+        config, plan.colorspace)  # fmt: skip
+
+
 def _encode_level(level: np.ndarray, plan: OutputPlan, config, dither: bool):
     """(codes, clip report, pixels with negatives zeroed for RGBE) of one level, encoded block
     of rows by block into one array of the stored type. A float level that needs no colour
     conversion is returned as it is (no copy)."""
     level = quantize.as_image(level)
-    converts = color.resolve_colorspace(config, plan.source_colorspace) != color.resolve_colorspace(
-        config, plan.colorspace)  # fmt: skip
-    if plan.pixel_type == "float" and plan.format != "hdr" and not converts:
+    if plan.pixel_type == "float" and plan.format != "hdr" and not _converts(plan, config):
         codes, report = quantize.quantize(level, "float")
         return codes, report, 0
     height, width, nch = level.shape
