@@ -128,7 +128,7 @@ def _geo(geometry):
 
 def resample_rows(
     src, rip, rip_levels, rip_rows, sgeometry, dgeometry, scale_x, scale_y, samples, filt, rot,
-    fill, out, alpha=None, weights=None, zeroed=False,
+    fill, out, alpha=None, weights=None, zeroed=False, coverage_channel=False,
 ):  # fmt: skip
     """Fill ``out`` (H, W, C float32) with ``src`` resampled; see :mod:`envconv.resample`.
 
@@ -141,7 +141,9 @@ def resample_rows(
     output directions to source directions; ``scale_x``, ``scale_y`` are level-0 output pixels
     per pixel of ``out`` (1 for level 0 of a mip chain). ``zeroed``: the arrays already hold
     zeros (``np.zeros``), so pixels in a layout's empty cells are left as they are: their
-    memory is never touched (half of a cross).
+    memory is never touched (half of a cross). ``coverage_channel``: ``out`` has one channel
+    more than ``src`` and its last channel receives the coverage (an alpha channel resampled in
+    place, with no second array; ``alpha`` must then be None).
     """
     args = (
         _c(src, np.float32), _c(rip, np.float32), int(rip_levels), int(rip_rows),
@@ -149,7 +151,8 @@ def resample_rows(
         int(filt), _c(rot, np.float64), bool(fill), out, alpha, weights, _threads,
     )  # fmt: skip
     bands = (out.shape[0] + TILE - 1) // TILE
-    _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed)), bands)
+    _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed),
+                                                 bool(coverage_channel)), bands)  # fmt: skip
 
 
 def rip_level_count(width: int) -> int:

@@ -17,9 +17,10 @@ resample
     ``I`` + a copy of the source with ``valid`` as one more channel (holes only) + the rip-map
     of a lat-long read with adaptive bilinear sampling (up to ``I``: levels 1 … K of the rows
     next to each pole that output pixels can read at that level, :func:`envconv.resample.rip_rows`)
-    + the output levels + one coverage plane per level (alpha, mips, same-grid copy) + two
+    + the output levels + one coverage plane per level (alpha, mips, same-grid copy; an alpha
+    channel appended to a single level is the kernel's coverage, written in place) + two
     planes of float64 sub-sample weights per level (mips) + the output levels again when alpha
-    is appended to a source without one (``np.concatenate`` per level).
+    is appended to a chain (``np.concatenate`` per level) or holes' V channel is dropped.
 write
     ``I`` + ``O`` + the encoded levels (half ``O/2``, 8-bit ``O/4``, 16-bit ``O/2``, a float
     output in the working space 0, a float output in another colour space ``O``) + one block
@@ -97,9 +98,11 @@ def estimate_convert(envmap, to, size: int, guard: int = 0, mips: Any = None,
     sizes = mip_sizes(to, size, guard, mips if mips else 1)
     planes = [w * h * 4 for w, h in sizes]
     output = sum(planes) * out_ch
-    coverage = sum(planes) if (alpha or mips or to.name == envmap.layout.name) else 0
+    appends = alpha and envmap.alpha_index is None
+    in_place = appends and not mips  # the kernel writes coverage into the alpha channel
+    coverage = sum(planes) if ((alpha and not in_place) or mips or to.name == envmap.layout.name) else 0
     weights = 2 * sum(planes) if mips else 0
-    appended = output if out_ch > nch else 0  # alpha appended, or valid's channel dropped
+    appended = output if (holes or (appends and mips)) else 0  # np.concatenate, V dropped
     rips = 0 if mips else rips
     resample = source + carrier + rips + output + coverage + weights + appended
     write = source + output + output // 2 + (4 << 20)

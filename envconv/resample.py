@@ -181,8 +181,10 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     channels = list(envmap.channels)
     src = envmap.pixels
     alpha_index = envmap.alpha_index
+    # An appended alpha channel of a single level is the kernel's coverage, written in place.
+    direct_alpha = alpha and alpha_index is None and not (mips or ggx or irradiance)
     # Zeroed (np.zeros maps fresh pages lazily): the kernel then never touches the empty cells.
-    out = np.zeros((height, width, src.shape[2]), np.float32)
+    out = np.zeros((height, width, src.shape[2] + int(direct_alpha)), np.float32)
     same_grid = (
         to.name == envmap.layout.name
         and size == envmap.size
@@ -192,7 +194,11 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     )
     # The coverage is kept for an alpha channel, the mip chain and the same-grid copy below.
     needs_coverage = alpha or mips or same_grid
-    coverage = np.zeros((height, width), np.float32) if needs_coverage else None
+    coverage = None
+    if direct_alpha:
+        coverage = out[:, :, -1]
+    elif needs_coverage:
+        coverage = np.zeros((height, width), np.float32)
     sgeo = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
     dgeo = kernel_geometry(to, size, guard_px)
     log.debug(
@@ -204,17 +210,21 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
         filter,
     )
     src = np.ascontiguousarray(src)
-    rip, rip_levels, rip_row_count = source_rips(envmap, src, n_samples, filter, to, size)
+    # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
+    rip, rip_levels, rip_row_count = source_rips(envmap, src, 1 if same_grid else n_samples,
+                                                 filter, to, size)  # fmt: skip
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
     weights = np.zeros((height, width), np.float64) if mips else None
     kernels.resample_rows(
         src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
-        FILTERS[filter], rot, fill, out, coverage, weights, zeroed=True,
+        FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
+        zeroed=True, coverage_channel=direct_alpha,
     )  # fmt: skip
+    del rip
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
         # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
-        np.copyto(out, src, where=coverage[:, :, None] > 0)
+        _copy_covered(out, src, coverage)
     chain = [(out, coverage)]
     if mips:
         from .mips import build_chain, level_count
@@ -234,7 +244,9 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
             chain, rough = ibl.ggx_levels(envmap, to, size, guard_px, fill, rot, chain, roughness)
             metadata["envconv:roughness"] = " ".join(f"{r:.6g}" for r in rough)
     if alpha:
-        if alpha_index is None:
+        if direct_alpha:
+            channels.append("A")
+        elif alpha_index is None:
             chain = [(np.concatenate([o, c[:, :, None]], axis=2), c) for o, c in chain]
             channels.append("A")
         else:
@@ -293,6 +305,16 @@ def _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_con
         name = get_layout(to).name
         memory.check(need, f"converting to {name} at size {size or 'default'}",
                      envmap.pixels.nbytes, "lower --size, or free memory")  # fmt: skip
+
+
+def _copy_covered(out: np.ndarray, src: np.ndarray, coverage: np.ndarray) -> None:
+    """Copy ``src`` into the first channels of ``out`` where ``coverage`` > 0, a block of rows
+    at a time (the mask of a whole map would be one more plane in memory)."""
+    nch = src.shape[2]
+    rows = max(1, (1 << 20) // max(1, out.shape[1]))
+    for y0 in range(0, out.shape[0], rows):
+        block = slice(y0, y0 + rows)
+        np.copyto(out[block, :, :nch], src[block], where=coverage[block, :, None] > 0)
 
 
 def _mip_filter(mips):

@@ -18,6 +18,11 @@ struct ResampleOutput {
     float* alpha;
     double* weights;
     bool zeroed;  // every output array already holds zeros: empty cells are left untouched
+    // Floats from one pixel to the next in `pixels` (0: `channels`) and in `alpha` (1: a
+    // plane); with stride channels + 1 and alpha = pixels + channels, the coverage lands in
+    // the channel after the colour ones, so an alpha channel needs no second array.
+    int64_t stride = 0;
+    int64_t alpha_stride = 1;
 };
 
 // A lat-long source's rip-map levels (rip_levels = 0: none), filled in rip_rows rows per pole.
