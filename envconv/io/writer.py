@@ -271,7 +271,7 @@ def _run_writes(temp, target, writes) -> None:
             opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
             if not opened:
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-            if not out.write_image(data):
+            if not _write_pixels(out, data):
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
     finally:
         ok = out.close()
@@ -279,6 +279,32 @@ def _run_writes(temp, target, writes) -> None:
         del out  # release (and flush) the file before it is renamed into place
         if not ok:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+
+
+#: Bytes of pixels handed to OIIO per call. One whole-image ``write_image`` made OIIO's PNG
+#: writer hold about nine times the image (docs/memory.md); bands of rows cost one band.
+WRITE_BAND_BYTES = 1 << 24
+
+
+def _write_pixels(out, data: np.ndarray) -> bool:
+    """Write one image's pixels (H, W, C) to the open ``out`` in bands of rows (scanline
+    files) or of rows of tiles (tiled files); False on a write error (``out.geterror()``)."""
+    spec = out.spec()
+    height = data.shape[0]
+    rows = max(1, WRITE_BAND_BYTES // max(1, data.shape[1] * data.shape[2] * data.itemsize))
+    if spec.tile_width:
+        rows = max(spec.tile_height, rows // spec.tile_height * spec.tile_height)
+    for y0 in range(0, height, rows):
+        band = data[y0 : y0 + rows]
+        y1 = spec.y + y0 + band.shape[0]
+        if spec.tile_width:
+            done = out.write_tiles(spec.x, spec.x + spec.width, spec.y + y0, y1, spec.z,
+                                   spec.z + max(spec.depth, 1), band)  # fmt: skip
+        else:
+            done = out.write_scanlines(spec.y + y0, y1, spec.z, band)
+        if not done:
+            return False
+    return True
 
 
 def _int_tag(fmt: str, value: int):
