@@ -22,11 +22,14 @@ resample
     planes of float64 sub-sample weights per level (mips) + the output levels again when alpha
     is appended to a chain (``np.concatenate`` per level) or holes' V channel is dropped.
 write
-    ``I`` + ``O`` + the encoded levels (half ``O/2``, 8-bit ``O/4``, 16-bit ``O/2``, a float
-    output in the working space 0, a float output in another colour space ``O``) + one block
-    of rows (:data:`envconv.io.encode.ENCODE_BLOCK_BYTES`). The output format is not known
-    when resampling starts, so the estimate counts ``O/2`` (a half EXR) and
-    :func:`envconv.io.encode.encode_output` checks again, knowing it, before encoding.
+    ``I`` + ``O`` + one block of rows being encoded (:data:`envconv.io.encode.ENCODE_BLOCK_BYTES`
+    of float32 and its temporaries) and the band handed to OIIO. A single-file layout's levels
+    are encoded a band at a time as they are written (:class:`envconv.io.encode.LazyLevel`).
+    Cells of a multi-file layout, parts of a multi-part file and DDS/KTX2 containers are cut
+    from one encoded copy of each level: half ``O/2``, 8-bit ``O/4``, 16-bit ``O/2``, float
+    0 (``O`` when colour is converted); the estimate counts ``O/2`` for multi-file layouts,
+    and :func:`envconv.io.encode.encode_output` checks again, knowing the format, before
+    encoding.
 
 A fixed ``SLACK`` (kernel thread buffers, OIIO and OpenEXR scratch) is added. The estimate is
 meant as an upper bound within 1.5× of the measured peak (``tests/test_memory.py`` checks a
@@ -56,8 +59,9 @@ from .errors import EnvconvError, UsageError
 __all__ = ["MemoryLimitError", "SLACK", "estimate_read", "estimate_convert", "available",
            "check", "format_bytes"]  # fmt: skip
 
-#: Bytes added to every estimate for buffers that do not scale with the images.
-SLACK = 16 << 20
+#: Bytes added to every estimate for what does not scale with the images: kernel thread
+#: buffers, OIIO and OpenEXR scratch, memory the allocator keeps after a decode.
+SLACK = 32 << 20
 
 #: Name of the environment variable that sets the memory available to a run (tests, CI).
 LIMIT_VARIABLE = "ENVCONV_MEMORY_LIMIT"
@@ -105,7 +109,9 @@ def estimate_convert(envmap, to, size: int, guard: int = 0, mips: Any = None,
     appended = output if (holes or (appends and mips)) else 0  # np.concatenate, V dropped
     rips = 0 if mips else rips
     resample = source + carrier + rips + output + coverage + weights + appended
-    write = source + output + output // 2 + (4 << 20)
+    # Single-file layouts are encoded a band at a time as written; the cells of a multi-file
+    # layout from one encoded copy of each level (counted as half float).
+    write = source + output + (output // 2 if to.multi_file else 0) + (8 << 20)
     return max(resample, write) + SLACK
 
 

@@ -161,7 +161,7 @@ def test_estimate_grows_with_every_array():
     base = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2)
     plane = 4 * 256 * 3 * 256 * 4  # one float32 plane of the 3N × 4N cross
     alpha = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2, alpha=True)
-    assert alpha - base >= 1.5 * plane  # the alpha channel in the output and its encoded copy
+    assert alpha - base >= plane  # the alpha channel in the output
     chain = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2, mips=True)
     assert chain - base >= 2 * plane  # a third more output, coverage and float64 weights
     holes = envconv.EnvMap(sky.pixels, "latlong", valid=np.ones((64, 128), np.float32))
