@@ -334,9 +334,22 @@ def bench_memory() -> None:
             peak = peak_rss([exe, "convert", source, out, *args])
             read, written = array_bytes(source, out)
             ratio = (peak - base) / (read + written)
+            guess = _estimate(source, args)
             print(f"memory {label}: peak {peak / 2**20:.0f} MB - baseline {base / 2**20:.0f} MB "
                   f"= {(peak - base) / 2**20:.0f} MB over in {read / 2**20:.0f} MB + out "
-                  f"{written / 2**20:.0f} MB: {ratio:.2f}")  # fmt: skip
+                  f"{written / 2**20:.0f} MB: {ratio:.2f}; estimate {guess / 2**20:.0f} MB "
+                  f"({guess / (peak - base):.2f}x)")  # fmt: skip
+
+
+def _estimate(source: str, args: list[str]) -> int:
+    """envconv.memory's estimate for ``convert SOURCE --to L --size N [--mips|--alpha]``,
+    worked out in a child process (reading the source here would swell later children)."""
+    options = {"mips": "--mips" in args, "alpha": "--alpha" in args}
+    code = ("import sys, envconv; print(envconv.resample.memory_needed(envconv.read(sys.argv[1]),"
+            f" {args[1]!r}, size={int(args[3])}, **{options!r}))")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", code, source], capture_output=True, text=True,
+                          check=True)  # fmt: skip
+    return int(done.stdout.split()[-1])
 
 
 def main(argv: list[str]) -> None:

@@ -24,7 +24,9 @@ samples="auto"
     With the bilinear filter a lat-long source is read through a horizontal rip-map where a
     pixel spans at least 8 × 2^k texels along x (its polar rows), and sub-samples are counted
     in that level's texels (see :func:`envconv.kernels.build_rips` and ``RIP_MIN_SPAN`` in
-    :mod:`envconv.kernels`).
+    :mod:`envconv.kernels`). The rip-map is filled only in the rows next to each pole, at most
+    a quarter of the source's bytes (:func:`rip_row_cap`, for the memory bound of
+    docs/memory.md); elsewhere level 0 is read with up to 32 sub-samples per edge.
     A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
     With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
     of output to source pixel pitch on the horizon, so that every level is the exact block
@@ -59,8 +61,8 @@ from .sampling import (
     default_size,
 )
 
-__all__ = ["convert", "default_size", "auto_samples", "source_rips", "memory_needed", "FILTERS",
-           "MAX_SAMPLES"]  # fmt: skip
+__all__ = ["convert", "default_size", "auto_samples", "source_rips", "rip_row_cap",
+           "memory_needed", "FILTERS", "MAX_SAMPLES"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -287,7 +289,8 @@ def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False
             and not envmap.guard:  # fmt: skip
         height, width, nch = envmap.pixels.shape
         levels = kernels.rip_level_count(width)
-        rows = min(height, 2 * rip_rows(width, height, layout, int(size))) if levels else 0
+        rows = rip_rows(width, height, layout, int(size)) if levels else 0
+        rows = min(height, 2 * min(rows, rip_row_cap(width, height)))
         rips = rows * (width - (width >> levels)) * (nch + int(envmap.valid is not None)) * 4
     return memory.estimate_convert(envmap, layout, int(size), guard_px, chain, alpha, rips)
 
@@ -353,11 +356,29 @@ def source_rips(
         and envmap.layout.name == "latlong"
         and not envmap.guard
     ):
-        height = src.shape[0]
-        rows = height if to is None or size is None else rip_rows(src.shape[1], height, to, size)
+        height, width = src.shape[:2]
+        rows = height if to is None or size is None else rip_rows(width, height, to, size)
+        rows = min(rows, rip_row_cap(width, height))
         rip, levels = kernels.build_rips(src, rows)
         return rip, levels, rows
     return np.zeros((1, 1, src.shape[2]), np.float32), 0, 0
+
+
+#: Largest share of the source's bytes the rip-map may hold (issue 15's memory bound, peak
+#: ≤ 1.25 × (input + output), leaves a quarter of the input for it when the output is small).
+RIP_SHARE = 0.25
+
+
+def rip_row_cap(width: int, height: int) -> int:
+    """Most rows next to each pole a ``width`` × ``height`` lat-long's rip-map may fill: the
+    filled rows hold at most RIP_SHARE of the source (about the rows within 22° of the
+    poles, where a pixel spans the most texels). Nearer the horizon the kernel reads level 0
+    with up to MAX_SAMPLES sub-samples per edge, as it does with the other filters."""
+    levels = kernels.rip_level_count(width)
+    if levels == 0:
+        return 0
+    packed = width - (width >> levels)
+    return max(1, int(RIP_SHARE * height * width / (2 * packed)))
 
 
 #: Output pitch is estimated from √Ω, which understates an anisotropic pixel's longer edge.
