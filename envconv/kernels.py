@@ -133,7 +133,7 @@ def resample_rows(
     """Fill ``out`` (H, W, C float32) with ``src`` resampled; see :mod:`envconv.resample`.
 
     ``alpha`` (H, W float32), when given, receives each pixel's valid-region coverage;
-    ``weights`` (H, W float64) each pixel's sum of sub-sample weights (the solid-angle density
+    ``weights`` (H, W float32) each pixel's sum of sub-sample weights (the solid-angle density
     of its readable sub-samples), from which the mip chain averages blocks with exactly the
     weights used here. ``rip`` holds ``rip_levels`` rip-map levels of a lat-long source
     (:func:`build_rips`), filled in the ``rip_rows`` rows next to each pole; they are read only
@@ -195,9 +195,11 @@ def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None 
 
 def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout) -> None:
     """Weighted means of bx × by blocks of ``src`` with weights ``wsrc``: ``out`` (h, w, C),
-    the blocks' weight sums ``wout`` and mean coverages ``aout``."""
+    the blocks' weight sums ``wout`` and mean coverages ``aout`` (``asrc`` and ``aout`` both
+    None: no coverage)."""
     _core.reduce_blocks(
-        _c(src, np.float32), _c(wsrc, np.float64), _c(asrc, np.float32), int(bx), int(by), out,
+        _c(src, np.float32), _c(wsrc, np.float32), None if asrc is None else _c(asrc, np.float32),
+        int(bx), int(by), out,
         wout, aout, _threads,
     )  # fmt: skip
 

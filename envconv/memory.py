@@ -17,10 +17,11 @@ resample
     ``I`` + a copy of the source with ``valid`` as one more channel (holes only) + the rip-map
     of a lat-long read with adaptive bilinear sampling (up to ``I``: levels 1 … K of the rows
     next to each pole that output pixels can read at that level, :func:`envconv.resample.rip_rows`)
-    + the output levels + one coverage plane per level (alpha, mips, same-grid copy; an alpha
-    channel appended to a single level is the kernel's coverage, written in place) + two
-    planes of float64 sub-sample weights per level (mips) + the output levels again when alpha
-    is appended to a chain (``np.concatenate`` per level) or holes' V channel is dropped.
+    + the output levels + one coverage plane per level (alpha, same-grid copy, GGX and
+    irradiance chains; an alpha channel appended to a single level is the kernel's coverage,
+    written in place) + one plane of float32 sub-sample weights per level (mips) + the output
+    levels again when alpha is appended to a chain (``np.concatenate`` per level) or holes' V
+    channel is dropped. (GGX and irradiance chains' own buffers are not counted.)
 write
     ``I`` + ``O`` + one block of rows being encoded (:data:`envconv.io.encode.ENCODE_BLOCK_BYTES`
     of float32 and its temporaries) and the band handed to OIIO. A single-file layout's levels
@@ -104,8 +105,8 @@ def estimate_convert(envmap, to, size: int, guard: int = 0, mips: Any = None,
     output = sum(planes) * out_ch
     appends = alpha and envmap.alpha_index is None
     in_place = appends and not mips  # the kernel writes coverage into the alpha channel
-    coverage = sum(planes) if ((alpha and not in_place) or mips or to.name == envmap.layout.name) else 0
-    weights = 2 * sum(planes) if mips else 0
+    coverage = sum(planes) if ((alpha and not in_place) or to.name == envmap.layout.name) else 0
+    weights = sum(planes) if mips else 0
     appended = output if (holes or (appends and mips)) else 0  # np.concatenate, V dropped
     rips = 0 if mips else rips
     resample = source + carrier + rips + output + coverage + weights + appended

@@ -25,7 +25,7 @@ samples="auto"
     pixel spans at least 8 × 2^k texels along x (its polar rows), and sub-samples are counted
     in that level's texels (see :func:`envconv.kernels.build_rips` and ``RIP_MIN_SPAN`` in
     :mod:`envconv.kernels`). The rip-map is filled only in the rows next to each pole, at most
-    a quarter of the source's bytes (:func:`rip_row_cap`, for the memory bound of
+    a fifth of the source's bytes (:func:`rip_row_cap`, for the memory bound of
     docs/memory.md); elsewhere level 0 is read with up to 32 sub-samples per edge.
     A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
     With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
@@ -194,8 +194,9 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
         and n_samples in (None, 1)
         and np.array_equal(rot, np.eye(3))
     )
-    # The coverage is kept for an alpha channel, the mip chain and the same-grid copy below.
-    needs_coverage = alpha or mips or same_grid
+    # The coverage is kept for an alpha channel, the GGX and irradiance chains and the
+    # same-grid copy below (a plain chain needs only the weights).
+    needs_coverage = alpha or same_grid or (mips and (ggx or irradiance))
     coverage = None
     if direct_alpha:
         coverage = out[:, :, -1]
@@ -216,7 +217,7 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     rip, rip_levels, rip_row_count = source_rips(envmap, src, 1 if same_grid else n_samples,
                                                  filter, to, size)  # fmt: skip
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
-    weights = np.zeros((height, width), np.float64) if mips else None
+    weights = np.zeros((height, width), np.float32) if mips else None
     kernels.resample_rows(
         src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
         FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
@@ -365,13 +366,14 @@ def source_rips(
 
 
 #: Largest share of the source's bytes the rip-map may hold (issue 15's memory bound, peak
-#: ≤ 1.25 × (input + output), leaves a quarter of the input for it when the output is small).
-RIP_SHARE = 0.25
+#: ≤ 1.25 × (input + output), leaves less than a quarter of the input for it when the output
+#: is small, and the kernel's buffers need some of that).
+RIP_SHARE = 0.2
 
 
 def rip_row_cap(width: int, height: int) -> int:
     """Most rows next to each pole a ``width`` × ``height`` lat-long's rip-map may fill: the
-    filled rows hold at most RIP_SHARE of the source (about the rows within 22° of the
+    filled rows hold at most RIP_SHARE of the source (about the rows within 18° of the
     poles, where a pixel spans the most texels). Nearer the horizon the kernel reads level 0
     with up to MAX_SAMPLES sub-samples per edge, as it does with the other filters."""
     levels = kernels.rip_level_count(width)
