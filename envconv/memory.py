@@ -39,9 +39,10 @@ real conversion against it; docs/memory.md lists measured ratios).
 The guard
 ---------
 :func:`check` compares an estimate with the memory available: ``ENVCONV_MEMORY_LIMIT`` (bytes,
-or with a K, M, G or T suffix) when set, else the smaller of Linux's ``MemAvailable`` and the
-room left under the process's cgroup v2 ``memory.max``, else ``sysconf(SC_AVPHYS_PAGES)``
-(other Unixes); with none of them nothing is checked. Memory the run already holds (the source,
+or with a K, M, G or T suffix) when set, else 80% (:data:`USABLE_SHARE`) of the smaller of
+Linux's ``MemAvailable``, the room left under the process's cgroup v2 ``memory.max`` and under
+``ulimit -v``, else
+of ``sysconf(SC_AVPHYS_PAGES)`` (other Unixes); with none of them nothing is checked. Memory the run already holds (the source,
 when resampling) counts as available. A run that does not fit raises
 :class:`MemoryLimitError` (an :class:`envconv.errors.EnvconvError`: one line, exit 1) before
 allocating. :func:`envconv.io.read` checks the read phase from the header;
@@ -63,6 +64,11 @@ __all__ = ["MemoryLimitError", "SLACK", "estimate_read", "estimate_convert", "av
 #: Bytes added to every estimate for what does not scale with the images: kernel thread
 #: buffers, OIIO and OpenEXR scratch, memory the allocator keeps after a decode.
 SLACK = 32 << 20
+
+#: Share of the memory the system reports available that a run may plan to use: the kernel's
+#: OOM killer strikes before MemAvailable is spent (page cache that cannot be dropped, other
+#: processes growing meanwhile); a 20.8 GB run with 21 GB "available" was killed.
+USABLE_SHARE = 0.8
 
 #: Name of the environment variable that sets the memory available to a run (tests, CI).
 LIMIT_VARIABLE = "ENVCONV_MEMORY_LIMIT"
@@ -152,19 +158,35 @@ def _cgroup_room() -> int | None:
         return None
 
 
+def _address_space_room() -> int | None:
+    """Bytes left under ``ulimit -v`` (RLIMIT_AS), less the address space already mapped."""
+    try:
+        import resource
+
+        limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+        if limit == resource.RLIM_INFINITY:
+            return None
+        with open("/proc/self/status") as handle:
+            size = next(int(line.split()[1]) * 1024 for line in handle if line.startswith("VmSize:"))
+        return max(limit - size, 0)
+    except (ImportError, OSError, ValueError, StopIteration):
+        return None
+
+
 def available() -> tuple[int | None, bool]:
-    """(bytes available, True when they come from ``ENVCONV_MEMORY_LIMIT``); None when this
-    system says nothing (see the module docstring)."""
+    """(bytes a run may use, True when they come from ``ENVCONV_MEMORY_LIMIT``): the variable,
+    else USABLE_SHARE of what the system reports available; None when it says nothing (see
+    the module docstring)."""
     text = os.environ.get(LIMIT_VARIABLE, "").strip()
     if text:
         return _parse_bytes(text), True
-    found = [v for v in (_meminfo_available(), _cgroup_room()) if v is not None]
-    if found:
-        return min(found), False
-    try:
-        return os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"), False
-    except (AttributeError, ValueError, OSError):
-        return None, False
+    found = [v for v in (_meminfo_available(), _cgroup_room(), _address_space_room()) if v is not None]
+    if not found:
+        try:
+            found = [os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")]
+        except (AttributeError, ValueError, OSError):
+            return None, False
+    return int(USABLE_SHARE * min(found)), False
 
 
 def format_bytes(count: float) -> str:
