@@ -102,3 +102,17 @@ def test_under_the_limit_converts(tmp_path):
                   "64", env={"ENVCONV_MEMORY_LIMIT": "2G"})  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert (tmp_path / "out.exr").is_file()
+
+
+def test_ulimit_is_respected(tmp_path):
+    """Under ``ulimit -v 4G`` a 5 GB conversion is refused with one line (it was "internal
+    error: MemoryError", exit 3)."""
+    import resource
+
+    def limit():
+        resource.setrlimit(resource.RLIMIT_AS, (4 << 30, 4 << 30))
+
+    source = _small_latlong(tmp_path)
+    run = envconv("convert", source, tmp_path / "out.exr", "--to", "cube-vcross", "--size",
+                  "6000", env={"ENVCONV_MEMORY_LIMIT": ""}, preexec_fn=limit)  # fmt: skip
+    assert_failed_cleanly(run, 1, tmp_path, message="cube-vcross at size 6000 needs about")

@@ -166,3 +166,18 @@ def test_estimate_grows_with_every_array():
     assert chain - base > 0.9 * plane  # a third more output and the float32 weights of each level
     holes = envconv.EnvMap(sky.pixels, "latlong", valid=np.ones((64, 128), np.float32))
     assert envconv.resample.memory_needed(holes, "cube-vcross", size=256, samples=2) > base
+
+
+def test_system_memory_is_used_at_80_percent(monkeypatch):
+    """Without the variable, a run may plan on USABLE_SHARE of the least the system reports:
+    MemAvailable, the cgroup's room and ulimit -v's room."""
+    monkeypatch.delenv(memory.LIMIT_VARIABLE, raising=False)
+    monkeypatch.setattr(memory, "_meminfo_available", lambda: 10 << 30)
+    monkeypatch.setattr(memory, "_cgroup_room", lambda: None)
+    monkeypatch.setattr(memory, "_address_space_room", lambda: None)
+    assert memory.available() == (8 << 30, False)
+    monkeypatch.setattr(memory, "_cgroup_room", lambda: 5 << 30)
+    assert memory.available() == (4 << 30, False)
+    with pytest.raises(memory.MemoryLimitError, match="needs about 6 GB of memory and 4 GB"):
+        memory.check(6 << 30, "this conversion")
+    memory.check(3 << 30, "this conversion")  # fits: no error
