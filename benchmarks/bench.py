@@ -15,7 +15,8 @@ Run by hand and quote the figures; nothing here is a test.
                                             # (see benchmarks/targets.py, or targets --help)
     python benchmarks/bench.py ibl          # GGX chain + irradiance, whole process, and per level
     python benchmarks/bench.py preview      # contact sheet and viewer page of a 16K lat-long, in process
-    python benchmarks/bench.py memory       # peak RSS over (input + output arrays), per case
+    python benchmarks/bench.py memory       # peak RSS over (input + output arrays), per case,
+                                            # beside envconv.memory's estimate (docs/memory.md)
 
 The envconv measured is the one the running interpreter imports (run this with a venv's python
 in which envconv is installed); the first line printed names it. Kernel throughput counts output
