@@ -4,19 +4,19 @@ The model
 ---------
 Every array envconv allocates is float32 (4 bytes per value) unless said otherwise. For a
 source of ``I`` bytes (H × W × C float32, as read: an ``A`` added for holes included) and an
-output of ``O`` bytes (every level of the chain, every channel, alpha included; ``O0`` the
-level-0 part, ``P0`` = H0 × W0 × 4 bytes one plane of level 0), a run's peak above the
-interpreter's baseline is the largest of three phases:
+output of ``O`` bytes (every level of the chain, every channel, alpha included), a run's
+peak above the interpreter's baseline is the largest of three phases:
 
 read
     ``I`` + the decode buffer of a file that does not store float32 (half: ``I/2``;
-    8/16-bit, decoded and then converted from sRGB: ``I + I/4``, the copy and its NaN mask)
+    8/16-bit, decoded and then converted from sRGB: ``I + I/C``, the copy and its NaN mask)
     + ``I`` + ``I/C`` when the data window leaves holes (the image placed in its display window
     and ``valid``).
 resample
     ``I`` + a copy of the source with ``valid`` as one more channel (holes only) + the rip-map
-    of a lat-long read with adaptive bilinear sampling (up to ``I``: levels 1 … K of the rows
-    next to each pole that output pixels can read at that level, :func:`envconv.resample.rip_rows`)
+    of a lat-long read with adaptive bilinear sampling (levels 1 … K of the rows next to each
+    pole that output pixels can read at that level, :func:`envconv.resample.rip_rows`, at most
+    a fifth of ``I``: :func:`envconv.resample.rip_row_cap`)
     + the output levels + one coverage plane per level (alpha, same-grid copy, GGX and
     irradiance chains; an alpha channel appended to a single level is the kernel's coverage,
     written in place) + one plane of float32 sub-sample weights per level (mips) + the output
@@ -32,18 +32,18 @@ write
     and :func:`envconv.io.encode.encode_output` checks again, knowing the format, before
     encoding.
 
-A fixed ``SLACK`` (kernel thread buffers, OIIO and OpenEXR scratch) is added. The estimate is
-meant as an upper bound within 1.5× of the measured peak (``tests/test_memory.py`` checks a
-real conversion against it; docs/memory.md lists measured ratios).
+A fixed ``SLACK`` of 32 MB (kernel thread buffers, OIIO and OpenEXR scratch) is added. The
+estimate is meant as an upper bound within 1.5× of the measured peak (``tests/test_memory.py``
+checks real conversions against it; docs/benchmarks.md lists measured ratios).
 
 The guard
 ---------
 :func:`check` compares an estimate with the memory available: ``ENVCONV_MEMORY_LIMIT`` (bytes,
 or with a K, M, G or T suffix) when set, else 80% (:data:`USABLE_SHARE`) of the smaller of
-Linux's ``MemAvailable``, the room left under the process's cgroup v2 ``memory.max`` and under
-``ulimit -v``, else
-of ``sysconf(SC_AVPHYS_PAGES)`` (other Unixes); with none of them nothing is checked. Memory the run already holds (the source,
-when resampling) counts as available. A run that does not fit raises
+Linux's ``MemAvailable``, the room left under the process's cgroup v2 ``memory.max`` and
+under ``ulimit -v``, else of ``sysconf(SC_AVPHYS_PAGES)`` (other Unixes); with none of them
+nothing is checked. Memory the run already holds (the source, when resampling) counts as
+available. A run that does not fit raises
 :class:`MemoryLimitError` (an :class:`envconv.errors.EnvconvError`: one line, exit 1) before
 allocating. :func:`envconv.io.read` checks the read phase from the header;
 :func:`envconv.resample.convert` checks the rest from the source in memory, and
@@ -58,8 +58,8 @@ from typing import Any
 
 from .errors import EnvconvError, UsageError
 
-__all__ = ["MemoryLimitError", "SLACK", "estimate_read", "estimate_convert", "available",
-           "check", "format_bytes"]  # fmt: skip
+__all__ = ["MemoryLimitError", "SLACK", "USABLE_SHARE", "LIMIT_VARIABLE", "estimate_read",
+           "estimate_convert", "available", "check", "format_bytes"]  # fmt: skip
 
 #: Bytes added to every estimate for what does not scale with the images: kernel thread
 #: buffers, OIIO and OpenEXR scratch, memory the allocator keeps after a decode.
