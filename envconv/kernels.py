@@ -128,12 +128,12 @@ def _geo(geometry):
 
 def resample_rows(
     src, rip, rip_levels, rip_rows, sgeometry, dgeometry, scale_x, scale_y, samples, filt, rot,
-    fill, out, alpha=None, weights=None, zeroed=False,
+    fill, out, alpha=None, weights=None, zeroed=False, coverage_channel=False,
 ):  # fmt: skip
     """Fill ``out`` (H, W, C float32) with ``src`` resampled; see :mod:`envconv.resample`.
 
     ``alpha`` (H, W float32), when given, receives each pixel's valid-region coverage;
-    ``weights`` (H, W float64) each pixel's sum of sub-sample weights (the solid-angle density
+    ``weights`` (H, W float32) each pixel's sum of sub-sample weights (the solid-angle density
     of its readable sub-samples), from which the mip chain averages blocks with exactly the
     weights used here. ``rip`` holds ``rip_levels`` rip-map levels of a lat-long source
     (:func:`build_rips`), filled in the ``rip_rows`` rows next to each pole; they are read only
@@ -141,7 +141,9 @@ def resample_rows(
     output directions to source directions; ``scale_x``, ``scale_y`` are level-0 output pixels
     per pixel of ``out`` (1 for level 0 of a mip chain). ``zeroed``: the arrays already hold
     zeros (``np.zeros``), so pixels in a layout's empty cells are left as they are: their
-    memory is never touched (half of a cross).
+    memory is never touched (half of a cross). ``coverage_channel``: ``out`` has one channel
+    more than ``src`` and its last channel receives the coverage (an alpha channel resampled in
+    place, with no second array; ``alpha`` must then be None).
     """
     args = (
         _c(src, np.float32), _c(rip, np.float32), int(rip_levels), int(rip_rows),
@@ -149,7 +151,8 @@ def resample_rows(
         int(filt), _c(rot, np.float64), bool(fill), out, alpha, weights, _threads,
     )  # fmt: skip
     bands = (out.shape[0] + TILE - 1) // TILE
-    _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed)), bands)
+    _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed),
+                                                 bool(coverage_channel)), bands)  # fmt: skip
 
 
 def rip_level_count(width: int) -> int:
@@ -192,9 +195,11 @@ def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None 
 
 def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout) -> None:
     """Weighted means of bx × by blocks of ``src`` with weights ``wsrc``: ``out`` (h, w, C),
-    the blocks' weight sums ``wout`` and mean coverages ``aout``."""
+    the blocks' weight sums ``wout`` and mean coverages ``aout`` (``asrc`` and ``aout`` both
+    None: no coverage)."""
     _core.reduce_blocks(
-        _c(src, np.float32), _c(wsrc, np.float64), _c(asrc, np.float32), int(bx), int(by), out,
+        _c(src, np.float32), _c(wsrc, np.float32), None if asrc is None else _c(asrc, np.float32),
+        int(bx), int(by), out,
         wout, aout, _threads,
     )  # fmt: skip
 

@@ -16,7 +16,8 @@ import numpy as np
 
 from envconv.errors import UsageError
 
-__all__ = ["ClipReport", "HALF_MAX", "BIT_DEPTHS", "quantize", "as_image", "colour_slice"]
+__all__ = ["ClipReport", "HALF_MAX", "BIT_DEPTHS", "quantize", "merge_reports", "as_image",
+           "colour_slice"]  # fmt: skip
 
 HALF_MAX = 65504.0
 """Largest finite IEEE half-float value."""
@@ -120,8 +121,9 @@ def _tpdf_noise(start: int, count: int) -> np.ndarray:
     u2 = (z & np.uint64(0xFFFFFF)).astype(np.float32)
     return (u1 - u2) * np.float32(2.0**-24)
 
-def _dither_colour(codes: np.ndarray, scale: float) -> None:
-    """Add TPDF dither in place to colour codes strictly inside (0, scale), row block-wise.
+def _dither_colour(codes: np.ndarray, scale: float, start: int = 0) -> None:
+    """Add TPDF dither in place to colour codes strictly inside (0, scale), row block-wise;
+    ``start`` is the flat index of the first element (of rows cut from a larger image).
 
     Codes already on the integer grid (within ``_ON_GRID``) are left alone: rounding them is
     exact, so an 8-bit image written again at 8 bits keeps its codes.
@@ -131,12 +133,20 @@ def _dither_colour(codes: np.ndarray, scale: float) -> None:
     rows = max(1, (1 << 22) // max(1, w * c))
     for y0 in range(0, h, rows):
         block = codes[y0 : y0 + rows]
-        noise = _tpdf_noise(y0 * w * c, block.size).reshape(block.shape)[..., sl]
+        noise = _tpdf_noise(start + y0 * w * c, block.size).reshape(block.shape)[..., sl]
         col = block[..., sl]
         inside = (col > 0) & (col < scale) & (np.abs(col - np.rint(col)) > _ON_GRID)
         block[..., sl] = np.where(inside, col + noise, col)
 
-def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True):
+def merge_reports(reports: list[ClipReport]) -> ClipReport:
+    """One :class:`ClipReport` of an image from the reports of its row blocks."""
+    first = reports[0]
+    fields = ("n_values", "n_pixels", "values_above", "values_below", "pixels_above",
+              "pixels_below", "pixels_clipped")  # fmt: skip
+    return ClipReport(first.bit_depth, *(sum(getattr(r, f) for r in reports) for f in fields))
+
+
+def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True, start: int = 0):
     """Convert float pixels to the storage type of ``bit_depth`` and report what was clipped.
 
     Parameters
@@ -150,6 +160,9 @@ def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True):
         input always gives the same output. Values that already sit on a code (within
         0.002 of one, e.g. 0, 1 or an 8-bit input written back at 8 bits) are not dithered;
         alpha and extra channels are only rounded.
+    start : int, default 0
+        Flat index of the first element in the whole image, when ``pixels`` are rows cut from
+        it (the dither noise is a function of that index, so blocks quantize as the whole).
 
     Returns
     -------
@@ -181,6 +194,6 @@ def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True):
     codes = arr * np.float32(scale)
     report = _clip_report(bit_depth, codes >= scale + 0.5, codes < -0.5)
     if dither and bit_depth == "uint8":
-        _dither_colour(codes, scale)
+        _dither_colour(codes, scale, start)
     codes = np.clip(np.rint(np.nan_to_num(codes, nan=0.0)), 0.0, scale)
     return codes.astype(np.dtype(bit_depth)), report

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import os
 import re
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -33,7 +34,7 @@ from .. import color, quantize
 from ..envmap import EnvMap
 from .formats import WRITE_FORMATS, check_compression, choose_pixel_type
 
-__all__ = ["OutputPlan", "plan_output", "Encoded", "encode_output"]
+__all__ = ["OutputPlan", "plan_output", "Encoded", "LazyLevel", "encode_output"]
 
 # xy of R, G, B and white, as OpenEXR's ``chromaticities`` attribute stores them.
 _CHROMATICITIES = {
@@ -97,6 +98,8 @@ class Encoded:
     plan: OutputPlan
     metadata: dict[str, Any]
     warnings: list[str]
+    #: The warnings known only once the levels were written (lazy levels): call it then.
+    finish: Callable[[], list[str]] = list
 
 def encode_output(
     envmap: EnvMap,
@@ -106,11 +109,14 @@ def encode_output(
     dither: bool = True,
     ocio_config: str | os.PathLike | None = None,
     compression: str | None = None,
+    lazy: bool = False,
 ) -> Encoded:
     """Convert, clip and quantize every level of ``envmap`` for writing to ``path``.
 
     See the module docstring.
-    Clipping is reported for level 0 (lower levels are its averages).
+    Clipping is reported for level 0 (lower levels are its averages). With ``lazy`` (not for
+    DDS and KTX2) the levels are :class:`LazyLevel`, encoded a band of rows at a time as they
+    are written, and the clipping warnings come from ``Encoded.finish()`` after writing.
     """
     plan = plan_output(path, envmap.pixel_type, envmap.metadata, output_colorspace, bit_depth,
                        ocio_config, compression)  # fmt: skip
@@ -118,20 +124,16 @@ def encode_output(
     where = os.fspath(path)
     warnings: list[str] = []
     levels = envmap.levels if envmap.levels is not None else [envmap.pixels]
-    out = []
+    lazy = lazy and plan.format not in ("dds", "ktx2")
+    _check_memory(levels, plan, config, where, lazy)
+    out, tally = [], []
     for k, level in enumerate(levels):
-        pixels = color.convert_keeping_nonfinite(level, plan.source_colorspace, plan.colorspace, config)
-        if plan.format == "hdr":
-            pixels, n_neg = _clamp_for_rgbe(pixels)
-            if n_neg and k == 0:
-                warnings.append(
-                    f"{where}: Radiance HDR cannot store negative values; "
-                    f"{_percent(n_neg, pixels.shape[0] * pixels.shape[1])} of pixels had "
-                    "negative values set to 0 (write EXR or float TIFF to keep them)"
-                )
-        codes, report = quantize.quantize(pixels, plan.pixel_type, dither=dither)
-        if k == 0 and report.message():
-            warnings.append(f"{where}: {report.message()}")
+        if lazy:
+            out.append(LazyLevel(quantize.as_image(level), plan, config, dither,
+                                 tally if k == 0 else []))  # fmt: skip
+            continue
+        codes, report, n_neg = _encode_level(level, plan, config, dither)
+        warnings.extend(_clip_warnings(where, [(report, n_neg)], level.shape))
         out.append(codes)
     if plan.format in _NO_COLORSPACE_TAG:
         assumed = color.default_colorspace(config, plan.format, plan.pixel_type)
@@ -148,7 +150,119 @@ def encode_output(
     primaries = _PRIMARIES.search(plan.metadata_colorspace)
     if plan.format == "openexr" and primaries and "chromaticities" not in metadata:
         metadata["chromaticities"] = _CHROMATICITIES[primaries.group(1)]
-    return Encoded(out, plan, metadata, warnings)
+    finish = (lambda: _clip_warnings(where, tally, levels[0].shape)) if lazy else list
+    return Encoded(out, plan, metadata, warnings, finish)
+
+
+def _clip_warnings(where: str, tally: list, shape) -> list[str]:
+    """Warning lines for level 0 from the (clip report, RGBE negatives) of its blocks."""
+    if not tally:
+        return []
+    warnings = []
+    n_neg = sum(n for _, n in tally)
+    if n_neg:
+        warnings.append(
+            f"{where}: Radiance HDR cannot store negative values; "
+            f"{_percent(n_neg, shape[0] * shape[1])} of pixels had "
+            "negative values set to 0 (write EXR or float TIFF to keep them)"
+        )
+    report = quantize.merge_reports([r for r, _ in tally])
+    if report.message():
+        warnings.append(f"{where}: {report.message()}")
+    return warnings
+
+#: Bytes of float32 pixels encoded at a time: colour conversion and quantisation make their
+#: temporaries for one block of rows, never for a whole level (see docs/memory.md).
+ENCODE_BLOCK_BYTES = 1 << 22
+
+
+def _check_memory(levels: list[np.ndarray], plan: OutputPlan, config, where: str,
+                  lazy: bool = False) -> None:  # fmt: skip
+    """Refuse, before encoding, when the encoded copy of the levels cannot fit in memory."""
+    from .. import memory
+
+    held = sum(level.nbytes for level in levels)
+    copy = _converts(plan, config) or plan.format == "hdr"
+    share = {"float": 4 if copy else 0, "half": 2, "uint16": 2, "uint8": 1}.get(plan.pixel_type, 4)
+    share = 0 if lazy else share
+    memory.check(held + held * share // 4 + ENCODE_BLOCK_BYTES, f"writing {where}", held,
+                 "write fewer levels or a smaller --size, or free memory")  # fmt: skip
+
+
+def _converts(plan: OutputPlan, config) -> bool:
+    """Whether writing converts colour (the source and output spaces differ)."""
+    return color.resolve_colorspace(config, plan.source_colorspace) != color.resolve_colorspace(
+        config, plan.colorspace)  # fmt: skip
+
+
+def _encode_rows(block: np.ndarray, plan: OutputPlan, config, dither: bool, start: int = 0):
+    """(codes, clip report, values of pixels zeroed for RGBE) of rows cut from a level whose
+    first element here is element ``start`` of the level (the dither noise follows it)."""
+    block = color.convert_keeping_nonfinite(block, plan.source_colorspace, plan.colorspace, config)
+    n_neg = 0
+    if plan.format == "hdr":
+        block, n_neg = _clamp_for_rgbe(block)
+    codes, report = quantize.quantize(block, plan.pixel_type, dither=dither, start=start)
+    return codes, report, n_neg
+
+
+def _encode_level(level: np.ndarray, plan: OutputPlan, config, dither: bool):
+    """(codes, clip report, pixels with negatives zeroed for RGBE) of one level, encoded block
+    of rows by block into one array of the stored type. A float level that needs no colour
+    conversion is returned as it is (no copy)."""
+    level = quantize.as_image(level)
+    if plan.pixel_type == "float" and plan.format != "hdr" and not _converts(plan, config):
+        codes, report = quantize.quantize(level, "float")
+        return codes, report, 0
+    height, width, nch = level.shape
+    rows = max(1, ENCODE_BLOCK_BYTES // max(1, width * nch * 4))
+    codes, reports, n_neg = None, [], 0
+    for y0 in range(0, height, rows):
+        done, report, n = _encode_rows(level[y0 : y0 + rows], plan, config, dither, y0 * width * nch)
+        if codes is None:
+            codes = np.empty((height, width, nch), done.dtype)
+        codes[y0 : y0 + rows] = done
+        reports.append(report)
+        n_neg += n
+    return codes, quantize.merge_reports(reports), n_neg
+
+
+class LazyLevel:
+    """A level encoded only as its rows are written (:meth:`rows`), so no encoded copy of the
+    whole level exists: what :func:`encode_output` gives with ``lazy=True``.
+
+    ``shape`` and ``itemsize`` are those of the stored image; :meth:`take` picks channels (as
+    ``codes[:, :, channels]`` would). Each band's clip report is added to ``tally``, from which
+    :attr:`Encoded.finish` makes the warnings once the level is written."""
+
+    def __init__(self, pixels, plan: OutputPlan, config, dither: bool, tally: list,
+                 channels=None):  # fmt: skip
+        self.pixels, self.plan, self.config, self.dither = pixels, plan, config, dither
+        self.tally = tally
+        self.channels = list(range(pixels.shape[2])) if channels is None else list(channels)
+        stored = {"uint8": np.uint8, "uint16": np.uint16, "half": np.float16}
+        self.itemsize = np.dtype(stored.get(plan.pixel_type, np.float32)).itemsize
+        #: Rows to encode at a time: ENCODE_BLOCK_BYTES of float32 pixels.
+        self.band_rows = max(1, ENCODE_BLOCK_BYTES // max(1, pixels.shape[1] * pixels.shape[2] * 4))
+
+    @property
+    def shape(self) -> tuple[int, int, int]:
+        return (*self.pixels.shape[:2], len(self.channels))
+
+    def take(self, channels) -> LazyLevel:
+        return LazyLevel(self.pixels, self.plan, self.config, self.dither, self.tally,
+                         [self.channels[c] for c in channels])  # fmt: skip
+
+    def rows(self, y0: int, y1: int) -> np.ndarray:
+        """Rows y0 … y1 − 1, encoded: a contiguous (y1 − y0, W, C) array of the stored type."""
+        width, nch = self.pixels.shape[1:]
+        codes, report, n_neg = _encode_rows(self.pixels[y0:y1], self.plan, self.config,
+                                            self.dither, y0 * width * nch)  # fmt: skip
+        self.tally.append((report, n_neg))
+        if self.channels != list(range(nch)):
+            codes = codes[:, :, self.channels]
+        return np.ascontiguousarray(codes)
+
 
 def _clamp_for_rgbe(pixels: np.ndarray) -> tuple[np.ndarray, int]:
     """Zero negative colour values (RGBE has no sign); return the pixels and how many had one."""

@@ -99,6 +99,7 @@ def read(
         raise LayoutError(f"a face set ({faces}) needs {{face}} in the path, e.g. sky_{{face}}.hdr")
     if layout is not None and get_layout(layout).multi_file:
         raise LayoutError(f"layout {layout} is stored as several files; put {{face}} in the path")
+    _check_memory(path, level, part)
     image = read_file(path, level, part)
     header = image.header
     pixels, channels, parts = _with_alpha(image.pixels, header, image.valid)
@@ -113,6 +114,20 @@ def read(
     envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata),
                     header.pixel_type, valid=valid, parts=parts)  # fmt: skip
     return to_working(envmap, input_colorspace, ocio_config)
+
+
+def _check_memory(path: str, level: int, part, files: int = 1) -> None:
+    """Refuse, from the header and before any pixel is read, an image (or ``files`` images of
+    one size, placed side by side) whose reading cannot fit in memory (:mod:`envconv.memory`)."""
+    from .. import memory
+
+    header = read_file_header(path, level, part)
+    holes = header.holes
+    channels = len(header.channels) + int(holes and not any(_is_alpha(c) for c in header.channels))
+    need = memory.estimate_read(header.width, header.height, channels, header.pixel_type, holes)
+    if files > 1:  # every file's image, then the mosaic they are joined into
+        need = 2 * files * (need - memory.SLACK) + memory.SLACK
+    memory.check(need, f"reading {path}", 0, "read a lower --level or a smaller file, or free memory")
 
 
 def _with_alpha(pixels: np.ndarray, header: FileHeader, valid: np.ndarray | None):
@@ -160,6 +175,7 @@ def _read_multi(template: str, layout: str | None, level: int, part: str | None,
 
     files = find_face_files(template, layout, faces)
     found = get_layout(files.layout)
+    _check_memory(files.paths[0], level, part, len(files.paths))
     images = [read_file(path, level, part) for path in files.paths]
     holes = any(image.valid is not None for image in images)
     cells = []

@@ -110,13 +110,11 @@ def write(
     from .encode import encode_output
 
     _check_parts(envmap, os.fspath(path))
+    # One file per level (not cells of a mosaic nor parts): encoded a band at a time as written.
+    lazy = not envmap.layout.multi_file and not envmap.parts
     encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
-                            compression)  # fmt: skip
-    for message in encoded.warnings:
-        if warnings is None:
-            log.warning("%s", message)
-        else:
-            warnings.append(message)
+                            compression, lazy)  # fmt: skip
+    _report(encoded.warnings, warnings)
     levels, bit_depth, compression = encoded.levels, encoded.plan.pixel_type, encoded.plan.compression
     envmap = replace(envmap, metadata=encoded.metadata, levels=None)
     if encoded.plan.format in ("dds", "ktx2"):
@@ -138,11 +136,21 @@ def write(
             _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
         for temp, target in temps:
             os.replace(temp, target)
+        _report(encoded.finish(), warnings)
     finally:
         for temp, _ in temps:
             if os.path.exists(temp):
                 os.remove(temp)
     return paths
+
+
+def _report(messages: list[str], warnings: list[str] | None) -> None:
+    """Append ``messages`` to ``warnings``, or log them when it is None."""
+    for message in messages:
+        if warnings is None:
+            log.warning("%s", message)
+        else:
+            warnings.append(message)
 
 
 def _check_parts(envmap: EnvMap, path: str) -> None:
@@ -273,7 +281,7 @@ def _run_writes(temp, target, writes) -> None:
             opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
             if not opened:
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-            if not out.write_image(data):
+            if not _write_pixels(out, data):
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
     finally:
         ok = out.close()
@@ -281,6 +289,35 @@ def _run_writes(temp, target, writes) -> None:
         del out  # release (and flush) the file before it is renamed into place
         if not ok:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+
+
+#: Bytes of pixels handed to OIIO per call. One whole-image ``write_image`` made OIIO's PNG
+#: writer hold about nine times the image (docs/memory.md); bands of rows cost one band.
+WRITE_BAND_BYTES = 1 << 24
+
+
+def _write_pixels(out, data) -> bool:
+    """Write one image's pixels (H, W, C: an array or an :class:`envconv.io.encode.LazyLevel`)
+    to the open ``out`` in bands of rows (scanline files) or of rows of tiles (tiled files);
+    False on a write error (``out.geterror()``)."""
+    spec = out.spec()
+    height = data.shape[0]
+    lazy = hasattr(data, "rows")  # an encode.LazyLevel: encoded here, band by band
+    rows = max(1, WRITE_BAND_BYTES // max(1, data.shape[1] * data.shape[2] * data.itemsize))
+    rows = data.band_rows if lazy else rows
+    if spec.tile_width:
+        rows = max(spec.tile_height, rows // spec.tile_height * spec.tile_height)
+    for y0 in range(0, height, rows):
+        band = data.rows(y0, min(height, y0 + rows)) if lazy else data[y0 : y0 + rows]
+        y1 = spec.y + y0 + band.shape[0]
+        if spec.tile_width:
+            done = out.write_tiles(spec.x, spec.x + spec.width, spec.y + y0, y1, spec.z,
+                                   spec.z + max(spec.depth, 1), band)  # fmt: skip
+        else:
+            done = out.write_scanlines(spec.y + y0, y1, spec.z, band)
+        if not done:
+            return False
+    return True
 
 
 def _int_tag(fmt: str, value: int):
@@ -327,10 +364,10 @@ def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, l
             max_channels,
             ",".join(channels[:max_channels]),
         )
-        pixels = pixels[:, :, :max_channels]
+        pixels = _take(pixels, range(max_channels))
         channels = channels[:max_channels]
     if fmt == "hdr" and len(channels) != 3:
-        pixels = np.repeat(pixels[:, :, :1], 3, axis=2)
+        pixels = _take(pixels, [0, 0, 0])
         channels = ["R", "G", "B"]
     nch = pixels.shape[2]
     alpha = next((k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None)
@@ -345,7 +382,14 @@ def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, l
         attributes.append(("compression", compression))
     if level is not None:
         attributes.append(("envconv:level", _int_tag(fmt, level)))
-    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, np.ascontiguousarray(pixels))
+    data = pixels if hasattr(pixels, "rows") else np.ascontiguousarray(pixels)
+    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, data)
+
+
+def _take(pixels, channels):
+    """``pixels[:, :, channels]`` of an array or of a lazily encoded level."""
+    channels = list(channels)
+    return pixels.take(channels) if hasattr(pixels, "rows") else pixels[:, :, channels]
 
 
 def _image_spec(image: LevelImage):
