@@ -32,6 +32,7 @@ from typing import Any
 
 from .errors import EnvconvError, ImageIOError, UsageError
 from .io import FORMATS
+from .io.temps import is_temp_name
 from .pipeline import Pipeline, Read, Resample, Write, path_variables
 
 __all__ = [
@@ -82,20 +83,22 @@ def expand_inputs(patterns: Iterable[str]) -> list[str]:
 
     A directory contributes its image files (by extension, not recursive). A glob or directory
     that yields nothing, or a plain path that does not exist, is an error before any work.
+    envconv's own temporary files (:func:`envconv.io.temps.is_temp_name`) are never inputs.
     """
     found: dict[str, None] = {}
     for pattern in patterns:
         pattern = os.fspath(pattern)
         if os.path.isdir(pattern):
             names = sorted(n for n in os.listdir(pattern)
-                           if os.path.splitext(n)[1].lower() in FORMATS)  # fmt: skip
+                           if os.path.splitext(n)[1].lower() in FORMATS and not is_temp_name(n))  # fmt: skip
             matches = [os.path.join(pattern, n) for n in names]
         elif "{face}" in pattern or not (_GLOB_CHARS & set(pattern)):
             if "{face}" not in pattern and not os.path.exists(pattern):
                 raise ImageIOError(f"input not found: {pattern}")
             matches = [pattern]
         else:
-            matches = sorted(p for p in glob.glob(pattern, recursive=True) if os.path.isfile(p))
+            matches = sorted(p for p in glob.glob(pattern, recursive=True)
+                             if os.path.isfile(p) and not is_temp_name(p))  # fmt: skip
         if not matches:
             raise ImageIOError(f"no input files match {pattern}")
         for match in matches:
@@ -312,15 +315,10 @@ def write_report(path: str | os.PathLike, result: BatchResult) -> None:
     """Write :func:`report_data` as JSON to ``path`` (through a temporary file and a rename)."""
     import json
 
-    path = os.fspath(path)
-    temp = f"{path}.envconv-{os.getpid()}.tmp"
+    from .io import write_bytes
+
+    text = json.dumps(report_data(result), indent=2) + "\n"
     try:
-        with open(temp, "w", encoding="utf-8") as handle:
-            json.dump(report_data(result), handle, indent=2)
-            handle.write("\n")
-        os.replace(temp, path)
-    except OSError as exc:
-        raise ImageIOError(f"cannot write report {path}: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+        write_bytes(text.encode("utf-8"), os.fspath(path))
+    except ImageIOError as exc:
+        raise ImageIOError(f"report: {exc}") from None

@@ -19,6 +19,7 @@ from ..envmap import EnvMap
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from .files import _first_line, _oiio
+from . import temps
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
@@ -130,18 +131,17 @@ def write(
         jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
     else:
         jobs = [([cell[f] for cell in cells], None, names[f]) for f in range(len(names))]
-    temps: list[tuple[str, str]] = []
+    written: list[tuple[str, str]] = []
     try:
         for target, (images, level, face) in zip(paths, jobs, strict=True):
             temp = _temp_path(target)
-            temps.append((temp, target))
+            written.append((temp, target))
             _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
-        for temp, target in temps:
+        for temp, target in written:
             os.replace(temp, target)
     finally:
-        for temp, _ in temps:
-            if os.path.exists(temp):
-                os.remove(temp)
+        for temp, _ in written:
+            _discard(temp)
     return paths
 
 
@@ -186,8 +186,7 @@ def write_bytes(data: bytes, path: str) -> str:
     except OSError as exc:
         raise ImageIOError(f"cannot write {path}: {exc.strerror or exc}") from None
     finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+        _discard(temp)
     return path
 
 
@@ -206,11 +205,22 @@ def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
 
 
 def _temp_path(target: str) -> str:
-    directory, name = os.path.split(os.path.abspath(target))
+    """A temporary file next to ``target`` (:mod:`envconv.io.temps`); pass it to
+    :func:`_discard` when done."""
+    directory = os.path.dirname(os.path.abspath(target))
     if not os.path.isdir(directory):
         raise ImageIOError(f"cannot write {target}: directory {directory} does not exist")
-    stem, ext = os.path.splitext(name)
-    return os.path.join(directory, f".{stem}.envconv-{os.getpid()}.tmp{ext}")
+    return temps.temp_path(target, directory)
+
+
+def _discard(temp: str) -> None:
+    """Remove ``temp`` if it was not renamed into place."""
+    try:
+        os.remove(temp)
+    except FileNotFoundError:
+        pass
+    finally:
+        temps.forget(temp)
 
 
 def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
