@@ -281,7 +281,7 @@ def _run_writes(temp, target, writes) -> None:
             opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
             if not opened:
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-            if not out.write_image(data):
+            if not _write_pixels(out, spec, data):
                 raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
     finally:
         ok = out.close()
@@ -289,6 +289,21 @@ def _run_writes(temp, target, writes) -> None:
         del out  # release (and flush) the file before it is renamed into place
         if not ok:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+
+
+def _write_pixels(out, spec, data) -> bool:
+    """Write one image's pixels to the open ``out``; False on failure (see ``out.geterror()``).
+
+    A tiled image (a MIP level) goes through ``write_tiles`` over the whole image:
+    OpenImageIO's ``write_image`` hands the tiles of a tiled file to its thread pool and, when
+    a write fails (a full disk: ENOSPC, EFBIG), waits forever for a task that has given up,
+    with SIGINT ignored. ``write_tiles`` writes the same tiles in this thread and returns False.
+    """
+    specs = spec if isinstance(spec, list) else [spec]
+    if specs[0].tile_width > 0:
+        height, width = data.shape[:2]
+        return out.write_tiles(0, width, 0, height, 0, 1, data)
+    return out.write_image(data)
 
 
 def _int_tag(fmt: str, value: int):
