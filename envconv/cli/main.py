@@ -144,9 +144,8 @@ class EnvconvGroup(click.Group):
             raise
         except BrokenPipeError:  # `envconv layouts | head`: click exits quietly
             raise
-        except KeyboardInterrupt:
-            click.echo("envconv: interrupted", err=True)
-            ctx.exit(130)
+        except KeyboardInterrupt as exc:  # SIGINT or SIGTERM (envconv.interrupt): 130 or 143
+            _interrupted(exc)
         except Exception as exc:  # never a traceback for the user
             if os.environ.get("ENVCONV_DEBUG"):
                 raise
@@ -200,9 +199,23 @@ def compose_steps(results, verbose: int, threads: int | None) -> None:
         run_chain(steps)
 
 
+def _interrupted(exc: BaseException) -> None:
+    from ..interrupt import describe, done, exit_status
+
+    click.echo(f"envconv: error: {describe(exc)}", err=True)
+    done()
+    sys.exit(exit_status(exc))
+
+
 def main() -> None:
     """Console-script entry point."""
-    cli.main(prog_name="envconv", standalone_mode=True)
+    from ..interrupt import install
+
+    install()
+    try:
+        cli.main(prog_name="envconv", standalone_mode=True)
+    except KeyboardInterrupt as exc:  # before or after a command ran
+        _interrupted(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -18,8 +18,8 @@ import numpy as np
 from ..envmap import EnvMap
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
-from .files import _first_line, _oiio
 from . import temps
+from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
