@@ -106,4 +106,5 @@ def install(sigint: bool = True, quiet: bool = False) -> None:
     signal.set_wakeup_fd(write, warn_on_full_buffer=False)
     signal.signal(signal.SIGTERM, _handler)
     signal.signal(signal.SIGINT, _handler if sigint else signal.SIG_IGN)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
     threading.Thread(target=_watch, args=(read,), name="envconv-signals", daemon=True).start()
