@@ -412,6 +412,9 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
     ]
     if face is not None:
         tags.append(("envconv:face", face))
+    stamp = _source_date()
+    if stamp is not None and "DateTime" not in envmap.metadata:
+        tags.append(("DateTime", stamp))
     if fmt == "openexr" and envmap.guard == 0:
         # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
         # "envmap" string would be stored with the wrong type and make the file unreadable.
@@ -420,6 +423,18 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
         elif envmap.layout.name == "cube-exr":
             tags.append(("textureformat", "CubeFace Environment"))
     return tags
+
+
+def _source_date() -> str | None:
+    """``DateTime`` from ``SOURCE_DATE_EPOCH`` (reproducible builds: the same inputs give the
+    same bytes, whenever and however often they are written), else None: OpenImageIO stamps
+    the time of writing."""
+    value = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if not value.isdigit():
+        return None
+    import time
+
+    return time.strftime("%Y:%m:%d %H:%M:%S", time.gmtime(int(value)))
 
 
 def _set_attribute(spec, name: str, value: Any) -> None:
