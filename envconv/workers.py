@@ -182,8 +182,19 @@ class _Pool:
             if worker.process.is_alive():
                 worker.process.kill()
                 worker.process.join(0.2)
+            self._drain(worker)
         for folder in self._folders():
             clean_stale(folder)
+
+    def _drain(self, worker: _Worker) -> None:
+        """Take the record a stopped worker sent before it stopped: that job did finish."""
+        try:
+            if worker.index is not None and worker.conn.poll():
+                index, record = worker.conn.recv()
+                self.finish(index, record)
+                worker.index = None
+        except (EOFError, OSError, ValueError):
+            pass
 
     def _folders(self) -> set[str]:
         folders = set()

@@ -280,15 +280,20 @@ def _run_writes(temp, target, writes) -> None:
         for spec, mode, data in writes:
             opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
             if not opened:
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
             if not _write_pixels(out, spec, data):
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
     finally:
         ok = out.close()
         message = out.geterror()
         del out  # release (and flush) the file before it is renamed into place
         if not ok:
-            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+            raise ImageIOError(f"cannot write {target}: {_error(message, temp, target)}")
+
+
+def _error(message: str, temp: str, target: str) -> str:
+    """The first line of a library's error, naming the target rather than its temp file."""
+    return _first_line(message).replace(temp, target)
 
 
 def _write_pixels(out, spec, data) -> bool:
