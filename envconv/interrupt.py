@@ -101,10 +101,14 @@ def install(sigint: bool = True, quiet: bool = False) -> None:
     if threading.current_thread() is not threading.main_thread():
         return
     _state["handled"] = quiet
-    read, write = os.pipe()
-    os.set_blocking(write, False)
-    signal.set_wakeup_fd(write, warn_on_full_buffer=False)
     signal.signal(signal.SIGTERM, _handler)
     signal.signal(signal.SIGINT, _handler if sigint else signal.SIG_IGN)
-    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+    if hasattr(signal, "pthread_sigmask"):  # POSIX: a batch worker starts with SIGINT blocked
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT, signal.SIGTERM})
+    try:
+        read, write = os.pipe()
+        os.set_blocking(write, False)
+        signal.set_wakeup_fd(write, warn_on_full_buffer=False)
+    except (OSError, ValueError):  # no non-blocking pipes here: no watchdog
+        return
     threading.Thread(target=_watch, args=(read,), name="envconv-signals", daemon=True).start()

@@ -89,11 +89,13 @@ class _Pool:
                                        name="envconv-worker", daemon=True)  # fmt: skip
         # SIGINT stays blocked in the new worker until it ignores it (envconv.interrupt), so a
         # Ctrl-C while it starts reaches only this process.
-        blocked = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+        mask = getattr(signal, "pthread_sigmask", None)
+        blocked = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask else None
         try:
             process.start()
         finally:
-            signal.pthread_sigmask(signal.SIG_SETMASK, blocked)
+            if mask:
+                mask(signal.SIG_SETMASK, blocked)
         theirs.close()
         worker = _Worker(process, mine)
         self._dispatch(worker)

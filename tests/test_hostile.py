@@ -208,6 +208,29 @@ def test_sigint_during_batch_cancels_the_queue_and_writes_the_report(tmp_path):
     assert_untouched(before)
 
 
+def test_sigterm_during_an_in_process_batch_writes_the_report(tmp_path):
+    """-j 1 runs the jobs in the envconv process itself: SIGTERM mid-job ends it with 143,
+    the job running is cancelled with the queue, the report lists what finished."""
+    inputs, out, report = tmp_path / "in", tmp_path / "out", tmp_path / "report.json"
+    inputs.mkdir()
+    for i in range(6):
+        _noise(inputs / f"sky{i}.exr", 32, seed=i)
+    process = _start("batch", inputs, "--out", out / "{stem}.exr", "--report", report,
+                     "resample", "--to", "latlong", "--size", 512, "--samples", 4)  # fmt: skip
+    first = process.stderr.readline()
+    assert " done " in first, first + process.communicate()[1]
+    seconds, stdout, stderr = _signal_after(process, signal.SIGTERM, lambda: True)
+    assert process.returncode == 143 and seconds < 2.0, (process.returncode, seconds, stderr)
+    assert stderr.splitlines()[-1] == "envconv: error: terminated (SIGTERM)", stderr
+    assert "Traceback" not in stderr and stdout == ""
+    statuses = [r["status"] for r in json.loads(report.read_text())["files"]]
+    assert statuses[0] == "done" and "cancelled" in statuses and "failed" not in statuses
+    done = sum(s == "done" for s in statuses)
+    written = sorted(os.listdir(out))  # the job stopped may have just renamed its output
+    assert written[:done] == [f"sky{i}.exr" for i in range(done)] and len(written) <= done + 1
+    assert not litter(tmp_path)
+
+
 def _constant_inputs(folder, count, ext="exr"):
     folder.mkdir()
     for i in range(count):
