@@ -28,7 +28,8 @@ import socket
 import threading
 import time
 
-__all__ = ["temp_path", "is_temp_name", "live_temps", "forget", "clean_stale", "FOREIGN_AGE"]
+__all__ = ["temp_for", "discard", "temp_path", "is_temp_name", "live_temps", "forget", "clean_stale",
+           "FOREIGN_AGE"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -61,6 +62,27 @@ def temp_path(target: str, directory: str) -> str:
     with _lock:
         _live.add(path)
     return path
+
+
+def temp_for(target: str) -> str:
+    """A temporary file next to ``target``, registered as live; pass it to :func:`discard`
+    once it is renamed into place or given up."""
+    from ..errors import ImageIOError
+
+    directory = os.path.dirname(os.path.abspath(target))
+    if not os.path.isdir(directory):
+        raise ImageIOError(f"cannot write {target}: directory {directory} does not exist")
+    return temp_path(target, directory)
+
+
+def discard(temp: str) -> None:
+    """Remove ``temp`` if it was not renamed into place; it is no longer live."""
+    try:
+        os.remove(temp)
+    except FileNotFoundError:
+        pass
+    finally:
+        forget(temp)
 
 
 def forget(path: str) -> None:

@@ -18,9 +18,10 @@ import numpy as np
 from ..envmap import EnvMap
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
-from . import temps
 from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
+from .temps import discard as _discard
+from .temps import temp_for as _temp_path
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
 
@@ -202,25 +203,6 @@ def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
     from ..facesets import from_envconv
 
     return from_envconv(faces, cells)
-
-
-def _temp_path(target: str) -> str:
-    """A temporary file next to ``target`` (:mod:`envconv.io.temps`); pass it to
-    :func:`_discard` when done."""
-    directory = os.path.dirname(os.path.abspath(target))
-    if not os.path.isdir(directory):
-        raise ImageIOError(f"cannot write {target}: directory {directory} does not exist")
-    return temps.temp_path(target, directory)
-
-
-def _discard(temp: str) -> None:
-    """Remove ``temp`` if it was not renamed into place."""
-    try:
-        os.remove(temp)
-    except FileNotFoundError:
-        pass
-    finally:
-        temps.forget(temp)
 
 
 def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
