@@ -103,6 +103,24 @@ def test_temp_files_are_never_inputs_and_stale_ones_are_cleaned(tmp_path):
     assert source.read_bytes() == data
 
 
+def test_temp_names_and_other_hosts_temps(tmp_path):
+    """Only envconv's temp names are recognised; another machine's temp in a shared folder
+    is kept while it may still be written (a day), then removed."""
+    from envconv.io.temps import FOREIGN_AGE, _host, clean_stale, is_temp_name
+
+    assert is_temp_name(".sky.envconv-0a1b2c3d-42-deadbeef.tmp.exr")
+    assert is_temp_name(".sky.envconv-42.tmp.exr")  # older envconv versions
+    for name in ("sky.exr", ".sky.exr", "sky.envconv.tmp.exr", ".sky.envconv-x.tmp.exr"):
+        assert not is_temp_name(name), name
+    host = "e" * 8 if _host() == "f" * 8 else "f" * 8  # not this machine
+    foreign = tmp_path / f".sky.envconv-{host}-{_dead_pid()}-00000000.tmp.exr"
+    foreign.write_bytes(b"partial")
+    assert clean_stale(str(tmp_path)) == [] and foreign.exists()
+    old = time.time() - FOREIGN_AGE - 60
+    os.utime(foreign, (old, old))
+    assert clean_stale(str(tmp_path)) == [str(foreign)] and not foreign.exists()
+
+
 @pytest.mark.parametrize(
     "name, extra",
     [("out.exr", []), ("out.exr", ["--mips"]), ("out.tif", []), ("out.tif", ["--mips"]),
