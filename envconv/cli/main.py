@@ -8,7 +8,8 @@ are whole commands that cannot be chained with others.
 
 Library errors (:class:`envconv.errors.EnvconvError`) print one line on stderr and exit 1; click
 usage errors exit 2; anything unexpected prints one line and exits 3 (set ``ENVCONV_DEBUG=1``
-for the traceback).
+for the traceback). SIGINT and SIGTERM end a run with one line and 130 or 143
+(:mod:`envconv.interrupt`).
 """
 
 from __future__ import annotations
@@ -108,7 +109,9 @@ class EnvconvGroup(click.Group):
             hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
             click.echo(f"envconv: error: {message}{hint}", err=True)
             sys.exit(exc.exit_code)
-        except click.exceptions.Abort:
+        except click.exceptions.Abort as exc:
+            if isinstance(exc.__cause__, KeyboardInterrupt):  # a signal while click parsed
+                _interrupted(exc.__cause__)
             click.echo("envconv: aborted", err=True)
             sys.exit(1)
         sys.exit(result if isinstance(result, int) else 0)
