@@ -36,8 +36,8 @@ from .io.temps import is_temp_name
 from .pipeline import Pipeline, Read, Resample, Write, path_variables
 
 __all__ = [
-    "Job", "BatchResult", "BatchInterrupted", "MODES", "STATUSES", "expand_inputs", "make_jobs", "run_job", "run_batch",
-    "report_data", "write_report", "worker_threads",
+    "Job", "BatchResult", "BatchInterrupted", "MODES", "STATUSES", "expand_inputs", "make_jobs",
+    "run_job", "run_batch", "report_data", "write_report", "worker_threads",
 ]  # fmt: skip
 
 log = logging.getLogger(__name__)
