@@ -75,7 +75,9 @@ class BatchResult:
     events: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.counts = {s: sum(r["status"] == s for r in self.records) for s in STATUSES}
+        # ``cancelled`` is counted only in an interrupted batch.
+        counts = {s: sum(r["status"] == s for r in self.records) for s in STATUSES}
+        self.counts = {s: n for s, n in counts.items() if n or s != "cancelled"}
 
     @property
     def ok(self) -> bool:
@@ -279,7 +281,7 @@ def run_batch(
         done = [r if r is not None else _failed(j, describe(exc), "cancelled")
                 for r, j in zip(records, jobs, strict=True)]  # fmt: skip
         result = BatchResult(done, round(time.perf_counter() - start, 4))
-        result.events.append(f"{describe(exc)}: {result.counts['cancelled']} jobs cancelled")
+        result.events.append(f"{describe(exc)}: {result.counts.get('cancelled', 0)} jobs cancelled")
         raise BatchInterrupted(result, exc) from None
     done = [
         r if r is not None else _failed(j, RuntimeError("not run"))
