@@ -26,6 +26,7 @@ GRACE = 0.8
 
 _NAMES = {signal.SIGINT: "interrupted (SIGINT)", signal.SIGTERM: "terminated (SIGTERM)"}
 _state = {"signum": None, "handled": False, "prefix": "envconv: error: "}
+_report_lock = threading.Lock()
 
 
 class Interrupted(KeyboardInterrupt):
@@ -46,9 +47,14 @@ def describe(exc: BaseException | None = None) -> str:
     return _NAMES.get(getattr(exc, "signum", signal.SIGINT), "interrupted")
 
 
-def done() -> None:
-    """The main thread has reported the interruption: the watchdog only ends the process."""
-    _state["handled"] = True
+def done() -> bool:
+    """Claim the report of the interruption: True for the first caller (who prints the one
+    line), False once the main thread or the watchdog has; the watchdog then only ends the
+    process."""
+    with _report_lock:
+        first = not _state["handled"]
+        _state["handled"] = True
+    return first
 
 
 def _handler(signum, frame) -> None:
@@ -67,7 +73,7 @@ def _emergency(signum: int) -> None:
         except OSError:
             pass
         forget(path)
-    if not _state["handled"]:
+    if done():
         try:
             os.write(2, f"{_state['prefix']}{_NAMES.get(signum, 'interrupted')}\n".encode())
         except OSError:

@@ -205,8 +205,8 @@ def compose_steps(results, verbose: int, threads: int | None) -> None:
 def _interrupted(exc: BaseException) -> None:
     from ..interrupt import describe, done, exit_status
 
-    click.echo(f"envconv: error: {describe(exc)}", err=True)
-    done()
+    if done():  # not yet reported by the watchdog (envconv.interrupt)
+        click.echo(f"envconv: error: {describe(exc)}", err=True)
     sys.exit(exit_status(exc))
 
 
