@@ -72,11 +72,17 @@ def _wait_for(predicate, timeout=60.0, step=0.002):
 def _signal_after(process, signum, predicate, timeout=60.0):
     """Send ``signum`` to the process group once ``predicate()`` holds; return (seconds from
     the signal to the exit, stdout, stderr)."""
-    _wait_for(lambda: predicate() or process.poll() is not None, timeout)
-    assert process.poll() is None, process.communicate()
-    sent = time.monotonic()
-    os.killpg(process.pid, signum)
-    out, err = process.communicate(timeout=30)
+    try:
+        _wait_for(lambda: predicate() or process.poll() is not None, timeout)
+        assert process.poll() is None, process.communicate()
+        sent = time.monotonic()
+        os.killpg(process.pid, signum)
+        out, err = process.communicate(timeout=30)
+    except BaseException:  # a failed case leaves no process behind
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.communicate()
+        raise
     return time.monotonic() - sent, out, err
 
 
