@@ -28,15 +28,6 @@ def mean_radiance(envmap: EnvMap) -> list[float]:
     return [float(v) for v in weighted / total]
 
 
-def _first_file(path: str, layout: str | None) -> str:
-    """The file whose header stands for a (possibly ``{face}``) path."""
-    if "{face}" not in path:
-        return path
-    from .io.face_files import find_face_files
-
-    return find_face_files(path, layout).paths[0]
-
-
 def _parts(header) -> list[dict[str, Any]]:
     skipped = dict(header.skipped)
     records = []
@@ -73,10 +64,11 @@ def describe(path: str, layout: str | None = None, level: int = 0, part: str | N
     from .color import input_colorspace_of, working_pixels
     from .detect import find_layout
     from .io import mip_levels, read, read_unplaced
+    from .io.face_files import first_file
     from .io.files import read_file_header
 
     path = str(path)
-    header = read_file_header(_first_file(path, layout), level, part)
+    header = read_file_header(first_file(path, layout), level, part)
     try:
         env = read(path, layout=layout, level=level, part=part)
     except LayoutError:
