@@ -91,11 +91,17 @@ def watch_progress(watcher: Callable[[int, int], None] | None):
     return previous
 
 
-def _run_watched(call, total: int) -> None:
-    """Run ``call(progress)`` on a helper thread, reporting ``progress[0]`` to the watcher."""
-    watcher = _watcher
-    if watcher is None:
-        call(None)
+def _run_watched(call, total: int, watch: bool = True) -> None:
+    """Run ``call(progress)`` on a helper thread, reporting ``progress[0]`` to the watcher.
+
+    The calling thread waits in short steps, so a signal (SIGINT, SIGTERM: an exception in
+    the main thread, see :mod:`envconv.interrupt`) is seen at once: the kernel is then
+    cancelled between bands of rows (``_core.cancel``) and the exception goes on. ``watch``
+    False: no progress to report (the call takes no counter).
+    """
+    watcher = _watcher if watch else None
+    if watcher is None and threading.current_thread() is not threading.main_thread():
+        call(None)  # signals reach the main thread only: nothing to wait for here
         return
     progress = np.zeros(1, np.int64)
     failure: list[BaseException] = []
@@ -108,15 +114,20 @@ def _run_watched(call, total: int) -> None:
 
     worker = threading.Thread(target=work, name="envconv-kernel", daemon=True)
     worker.start()
-    while worker.is_alive():
-        worker.join(0.2)
-        if worker.is_alive():
-            watcher(int(progress[0]), total)
+    try:
+        while worker.is_alive():
+            worker.join(0.2 if watcher is not None else 0.05)
+            if watcher is not None and worker.is_alive():
+                watcher(int(progress[0]), total)
+    except BaseException:
+        _core.cancel(True)
+        worker.join()
+        _core.cancel(False)
+        raise
     if failure:
         raise failure[0]
-    watcher(int(progress[0]), total)  # the end, however fast the kernel was
-
-
+    if watcher is not None:
+        watcher(int(progress[0]), total)  # the end, however fast the kernel was
 def _c(array, dtype) -> np.ndarray:
     return np.ascontiguousarray(array, dtype)
 
@@ -310,10 +321,11 @@ def ibl_prefilter(pyramid, p, nch, geometry, scale_x, scale_y, alpha, samples, r
     """Fill ``out`` (H, W, C) with the environment under the GGX lobe of roughness ``alpha``
     (α = r²; α = 1 with the clamped cosine: irradiance / π), read from ``pyramid``
     (:func:`ibl_pyramid` of a p-cube); ``tau`` bounds the expansion step (src/core/ibl.h)."""
-    _core.ibl_prefilter(
+    args = (
         pyramid, int(p), int(nch), *_geo(geometry), float(scale_x), float(scale_y), float(alpha),
         int(samples), _c(rot, np.float64), bool(fill), float(tau), out, _threads,
     )  # fmt: skip
+    _run_watched(lambda _: _core.ibl_prefilter(*args), 0, watch=False)
 
 
 def sh_project(pixels, geometry, samples: int, sign_x: float) -> np.ndarray:

@@ -12,7 +12,7 @@ from typing import Any
 
 import click
 
-from ..batch import expand_inputs, make_jobs, run_batch, write_report
+from ..batch import BatchInterrupted, expand_inputs, make_jobs, run_batch, write_report
 from ..graph import load_graph
 from ..pipeline import Pipeline, Resample, Write
 from .main import cli
@@ -68,6 +68,8 @@ def batch_command(inputs, out, graph, **options):
     A bad file never stops the batch; the exit status is 1 if any input failed. Before any
     work the batch is refused if an output is one of its inputs (also through a link, e.g.
     --out '{dir}/{stem}.exr'), if two outputs share a path, and with -n if an output exists.
+    A worker that dies costs only its own job, run once more on a fresh worker. SIGINT/SIGTERM
+    cancel the queued jobs, write the report of what finished and exit 130/143.
 
     \b
     Example:
@@ -130,6 +132,10 @@ def execute(jobs, workers=1, skip_existing=False, update=False, report=None, das
     progress = Progress(len(jobs))
     try:
         result = run_batch(jobs, workers=workers, mode=mode, dask=dask, on_record=progress.update)
+    except BatchInterrupted as exc:  # the report of what finished, then exit 130/143
+        if report:
+            write_report(report, exc.result)
+        raise
     finally:
         progress.close()
     if report:

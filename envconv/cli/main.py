@@ -8,7 +8,8 @@ are whole commands that cannot be chained with others.
 
 Library errors (:class:`envconv.errors.EnvconvError`) print one line on stderr and exit 1; click
 usage errors exit 2; anything unexpected prints one line and exits 3 (set ``ENVCONV_DEBUG=1``
-for the traceback).
+for the traceback). SIGINT and SIGTERM end a run with one line and 130 or 143
+(:mod:`envconv.interrupt`).
 """
 
 from __future__ import annotations
@@ -108,7 +109,9 @@ class EnvconvGroup(click.Group):
             hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
             click.echo(f"envconv: error: {message}{hint}", err=True)
             sys.exit(exc.exit_code)
-        except click.exceptions.Abort:
+        except click.exceptions.Abort as exc:
+            if isinstance(exc.__cause__, KeyboardInterrupt):  # a signal while click parsed
+                _interrupted(exc.__cause__)
             click.echo("envconv: aborted", err=True)
             sys.exit(1)
         sys.exit(result if isinstance(result, int) else 0)
@@ -144,9 +147,8 @@ class EnvconvGroup(click.Group):
             raise
         except BrokenPipeError:  # `envconv layouts | head`: click exits quietly
             raise
-        except KeyboardInterrupt:
-            click.echo("envconv: interrupted", err=True)
-            ctx.exit(130)
+        except KeyboardInterrupt as exc:  # SIGINT or SIGTERM (envconv.interrupt): 130 or 143
+            _interrupted(exc)
         except Exception as exc:  # never a traceback for the user
             if os.environ.get("ENVCONV_DEBUG"):
                 raise
@@ -193,9 +195,23 @@ def cli(verbose: int, threads: int | None) -> None:
         set_threads(threads)
 
 
+def _interrupted(exc: BaseException) -> None:
+    from ..interrupt import describe, done, exit_status
+
+    if done():  # not yet reported by the watchdog (envconv.interrupt)
+        click.echo(f"envconv: error: {describe(exc)}", err=True)
+    sys.exit(exit_status(exc))
+
+
 def main() -> None:
     """Console-script entry point."""
-    cli.main(prog_name="envconv", standalone_mode=True)
+    from ..interrupt import install
+
+    install()
+    try:
+        cli.main(prog_name="envconv", standalone_mode=True)
+    except KeyboardInterrupt as exc:  # before or after a command ran
+        _interrupted(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -13,7 +13,8 @@ import numpy as np
 
 from ..errors import ImageIOError
 from .files import _first_line, _oiio
-from .writer import _temp_path, write_bytes
+from .temps import discard, temp_for
+from .writer import write_bytes
 
 __all__ = ["write_picture", "write_page"]
 
@@ -27,11 +28,11 @@ def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
     """
     target = os.fspath(path)
     data = np.ascontiguousarray(pixels, dtype=np.uint8)
-    temp = _temp_path(target)
     oiio = _oiio()
     out = oiio.ImageOutput.create(target)
     if out is None:
         raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
+    temp = temp_for(target)
     spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], "uint8")
     spec.attribute("oiio:ColorSpace", "srgb_display")
     try:
@@ -43,8 +44,7 @@ def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
         os.replace(temp, target)
     finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+        discard(temp)
     return target
 
 

@@ -20,6 +20,8 @@ from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
+from .temps import discard as _discard
+from .temps import temp_for as _temp_path
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
 
@@ -128,19 +130,18 @@ def write(
         jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
     else:
         jobs = [([cell[f] for cell in cells], None, names[f]) for f in range(len(names))]
-    temps: list[tuple[str, str]] = []
+    written: list[tuple[str, str]] = []
     try:
         for target, (images, level, face) in zip(paths, jobs, strict=True):
             temp = _temp_path(target)
-            temps.append((temp, target))
+            written.append((temp, target))
             _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
-        for temp, target in temps:
+        for temp, target in written:
             os.replace(temp, target)
         _report(encoded.finish(), warnings)
     finally:
-        for temp, _ in temps:
-            if os.path.exists(temp):
-                os.remove(temp)
+        for temp, _ in written:
+            _discard(temp)
     return paths
 
 
@@ -194,8 +195,7 @@ def write_bytes(data: bytes, path: str) -> str:
     except OSError as exc:
         raise ImageIOError(f"cannot write {path}: {exc.strerror or exc}") from None
     finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+        _discard(temp)
     return path
 
 
@@ -211,14 +211,6 @@ def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
     from ..facesets import from_envconv
 
     return from_envconv(faces, cells)
-
-
-def _temp_path(target: str) -> str:
-    directory, name = os.path.split(os.path.abspath(target))
-    if not os.path.isdir(directory):
-        raise ImageIOError(f"cannot write {target}: directory {directory} does not exist")
-    stem, ext = os.path.splitext(name)
-    return os.path.join(directory, f".{stem}.envconv-{os.getpid()}.tmp{ext}")
 
 
 def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
@@ -280,15 +272,20 @@ def _run_writes(temp, target, writes) -> None:
         for spec, mode, data in writes:
             opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
             if not opened:
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
             if not _write_pixels(out, data):
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
     finally:
         ok = out.close()
         message = out.geterror()
         del out  # release (and flush) the file before it is renamed into place
         if not ok:
-            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+            raise ImageIOError(f"cannot write {target}: {_error(message, temp, target)}")
+
+
+def _error(message: str, temp: str, target: str) -> str:
+    """The first line of a library's error, naming the target rather than its temp file."""
+    return _first_line(message).replace(temp, target)
 
 
 #: Bytes of pixels handed to OIIO per call. One whole-image ``write_image`` made OIIO's PNG
@@ -299,7 +296,13 @@ WRITE_BAND_BYTES = 1 << 24
 def _write_pixels(out, data) -> bool:
     """Write one image's pixels (H, W, C: an array or an :class:`envconv.io.encode.LazyLevel`)
     to the open ``out`` in bands of rows (scanline files) or of rows of tiles (tiled files);
-    False on a write error (``out.geterror()``)."""
+    False on a write error (``out.geterror()``).
+
+    Tiled files (MIP levels) go through ``write_tiles``, never ``write_image``: OpenImageIO's
+    ``write_image`` hands the tiles of a tiled file to its thread pool and, when a write fails
+    (a full disk: ENOSPC, EFBIG), waits forever for a task that has given up, with SIGINT
+    ignored. ``write_tiles`` writes in this thread and returns False.
+    """
     spec = out.spec()
     height = data.shape[0]
     lazy = hasattr(data, "rows")  # an encode.LazyLevel: encoded here, band by band
@@ -433,6 +436,9 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
     ]
     if face is not None:
         tags.append(("envconv:face", face))
+    stamp = _source_date()
+    if stamp is not None and "DateTime" not in envmap.metadata:
+        tags.append(("DateTime", stamp))
     if fmt == "openexr" and envmap.guard == 0:
         # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
         # "envmap" string would be stored with the wrong type and make the file unreadable.
@@ -441,6 +447,18 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
         elif envmap.layout.name == "cube-exr":
             tags.append(("textureformat", "CubeFace Environment"))
     return tags
+
+
+def _source_date() -> str | None:
+    """``DateTime`` from ``SOURCE_DATE_EPOCH`` (reproducible builds: the same inputs give the
+    same bytes, whenever and however often they are written), else None: OpenImageIO stamps
+    the time of writing."""
+    value = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if not value.isdigit():
+        return None
+    import time
+
+    return time.strftime("%Y:%m:%d %H:%M:%S", time.gmtime(int(value)))
 
 
 def _set_attribute(spec, name: str, value: Any) -> None:

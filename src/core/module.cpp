@@ -13,6 +13,7 @@
 
 #include "ibl.h"
 #include "kernels.h"
+#include "parallel.h"
 #include "ripmap.h"
 #include "tiles.h"
 
@@ -328,6 +329,8 @@ NB_MODULE(_core, m) {
           "samples"_a, "rot"_a, "fill"_a, "tau"_a, "out"_a, "threads"_a);
     m.def("sh_project", &sh_project, "image"_a, "geo"_a, "cell_face"_a, "cell_turns"_a,
           "face_cell"_a, "samples"_a, "sign_x"_a, "out"_a, "threads"_a);
+    // Stop (true) every running kernel at its next task, or let kernels run again (false).
+    m.def("cancel", [](bool on) { envconv::cancel_requested.store(on); }, "on"_a);
     m.attr("TILE") = envconv::kTile;  // output rows per band: the progress counter's unit
     m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;
     m.attr("AUTO_MAX_SAMPLES") = envconv::kAutoMaxSamples;
