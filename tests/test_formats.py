@@ -135,7 +135,7 @@ def test_default_bit_depth_follows_the_input(tmp_path, src_type, ext, expected):
 def test_bit_depth_the_format_cannot_store_is_a_one_line_error(tmp_path):
     write_plain(tmp_path / "in.exr", linear_values())
     result = convert(tmp_path / "in.exr", tmp_path / "out.exr", "--bit-depth", "uint8")
-    assert result.exit_code == 1 and len(stderr_lines(result)) == 1
+    assert result.exit_code == 2 and len(stderr_lines(result)) == 1  # arguments that contradict
     assert "half, float" in result.stderr and not (tmp_path / "out.exr").exists()
 
 
