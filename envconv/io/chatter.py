@@ -13,7 +13,9 @@ file while a read or write runs, then puts them back and deals with what was cau
   :class:`~envconv.errors.ImageIOError` "out of memory" naming the operation;
 * the block succeeded: each line caught is logged at debug level (``envconv -vv``).
 
-Python warnings raised meanwhile (numpy's) are caught the same way. Captures nest, and threads
+Text that bindings print through Python's ``sys.stdout``/``sys.stderr`` (OpenEXR's module
+prints its pixel-read warning so) and Python warnings raised meanwhile (numpy's) are caught
+the same way. Captures nest, and threads
 share one: only the outermost redirects the descriptors (they belong to the process).
 Capturing is skipped when the descriptors cannot be duplicated (closed streams).
 """
@@ -21,13 +23,14 @@ Capturing is skipped when the descriptors cannot be duplicated (closed streams).
 from __future__ import annotations
 
 import ctypes
+import io
 import logging
 import os
 import sys
 import tempfile
 import threading
 import warnings
-from contextlib import contextmanager
+from contextlib import contextmanager, redirect_stderr, redirect_stdout
 
 from ..errors import EnvconvError, ImageIOError
 
@@ -151,9 +154,11 @@ def library_output(what: str, path: str | os.PathLike | None = None):
     caught = Caught()
     name = os.path.basename(os.fspath(path)) if path is not None else None
     failure = None
+    python_text = io.StringIO()  # bindings that print through Python (OpenEXR's py::print)
     with _redirected() as sink:
         try:
-            with warnings.catch_warnings(record=True) as recorded:
+            with warnings.catch_warnings(record=True) as recorded, \
+                    redirect_stdout(python_text), redirect_stderr(python_text):
                 warnings.simplefilter("always")
                 try:
                     yield caught
@@ -161,7 +166,7 @@ def library_output(what: str, path: str | os.PathLike | None = None):
                     caught.warnings = [f"{w.category.__name__}: {w.message}" for w in recorded]
         except BaseException as exc:  # folded below, once the descriptors are back
             failure = exc
-    caught.text = _read_back(sink)
+    caught.text = python_text.getvalue()[:_KEEP_BYTES] + _read_back(sink)
     if failure is None:
         _report(caught, name)
         return
