@@ -10,7 +10,7 @@ Exit statuses: 0 success; 2 bad usage (click's usage errors and envconv's own
 :class:`envconv.errors.UsageError`); 1 a run-time failure (any other
 :class:`envconv.errors.EnvconvError`: a missing or damaged file, a layout that does not fit);
 3 an internal error, a bug in envconv (one line naming the exception; set ``ENVCONV_DEBUG=1``
-for the traceback); 130 interrupted. Each error is one line on stderr; stdout carries results
+for the traceback); 130 interrupted. Running out of memory is a run-time failure (1). Each error is one line on stderr; stdout carries results
 only.
 """
 
@@ -164,6 +164,10 @@ class EnvconvGroup(click.Group):
         except KeyboardInterrupt:
             click.echo("envconv: interrupted", err=True)
             ctx.exit(130)
+        except MemoryError as exc:  # not a bug: the machine is too small for this run
+            detail = one_line(str(exc)) if str(exc).strip() else ""
+            click.echo(f"envconv: error: out of memory{': ' + detail if detail else ''}", err=True)
+            ctx.exit(1)
         except Exception as exc:  # never a traceback for the user
             if os.environ.get("ENVCONV_DEBUG"):
                 raise
