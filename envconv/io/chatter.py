@@ -166,7 +166,7 @@ def library_output(what: str, path: str | os.PathLike | None = None):
                     caught.warnings = [f"{w.category.__name__}: {w.message}" for w in recorded]
         except BaseException as exc:  # folded below, once the descriptors are back
             failure = exc
-    caught.text = python_text.getvalue()[:_KEEP_BYTES] + _read_back(sink)
+    caught.text = _read_back(sink) + "\n" + python_text.getvalue()[:_KEEP_BYTES]
     if failure is None:
         _report(caught, name)
         return
