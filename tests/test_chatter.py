@@ -72,3 +72,4 @@ def test_nested_captures_and_python_warnings(capfd):
 def test_meaningful_lines_drop_prefixes_blanks_and_repeats():
     text = "x.exr: bad\n\n  x.exr: bad  \nWarning: Exception raised\nother\n"
     assert meaningful_lines(text, "x.exr") == ["bad", "Exception raised", "other"]
+    assert meaningful_lines("/d/x.exr: bad\nx.exr: bad\n", "/d/x.exr") == ["bad"]  # as given, or base

@@ -23,6 +23,7 @@ Capturing is skipped when the descriptors cannot be duplicated (closed streams).
 from __future__ import annotations
 
 import ctypes
+import functools
 import io
 import logging
 import os
@@ -58,13 +59,15 @@ class Caught:
 
 
 def meaningful_lines(text: str, name: str | None = None) -> list[str]:
-    """The distinct non-blank lines of ``text``, stripped, a ``NAME:`` prefix (the file's base
-    name, as OpenEXR starts its messages) and a ``Warning:`` prefix dropped."""
+    """The distinct non-blank lines of ``text``, stripped, a ``NAME:`` prefix (the file's path
+    or base name, as OpenEXR starts its messages) and a ``Warning:`` prefix dropped."""
     found: list[str] = []
+    base = os.path.basename(name) if name else None
+    prefixes = [f"{p}:" for p in dict.fromkeys((name, base)) if p] + ["Warning:", "warning:"]
     for line in text.splitlines():
         line = " ".join(line.split())
-        for prefix in (f"{name}:" if name else None, "Warning:", "warning:"):
-            if prefix and line.startswith(prefix):
+        for prefix in prefixes:
+            if line.startswith(prefix):
                 line = line[len(prefix) :].strip()
         if line and line not in found:
             found.append(line)
@@ -74,10 +77,17 @@ def meaningful_lines(text: str, name: str | None = None) -> list[str]:
 def _flush_c_stdio() -> None:
     """Flush C stdio buffers (C++ ``std::cout`` writes through them), so text a library
     printed lands in the capture, not on the real stdout after it is restored."""
+    fflush = _c_fflush()
+    if fflush is not None:
+        fflush(None)
+
+
+@functools.cache
+def _c_fflush():
     try:
-        ctypes.CDLL(None).fflush(None)
+        return ctypes.CDLL(None).fflush
     except (OSError, AttributeError, TypeError):  # no C library by that name (Windows)
-        pass
+        return None
 
 
 def _flush_python() -> None:
@@ -101,7 +111,7 @@ def _redirected():
     try:
         if outer:
             try:
-                sink = tempfile.TemporaryFile()  # unlinked at once: never litter
+                sink = _sink()
                 _flush_python()
                 _flush_c_stdio()
                 saved = [os.dup(1), os.dup(2)]
@@ -123,16 +133,29 @@ def _redirected():
             _DEPTH -= 1
 
 
+_SINK: tuple[int, object] | None = None
+
+
+def _sink():
+    """This process's capture file, emptied: an unlinked temporary file (never litter), made
+    once per process (a forked batch worker makes its own; 0.3 ms saved per file read)."""
+    global _SINK
+    if _SINK is None or _SINK[0] != os.getpid():
+        _SINK = (os.getpid(), tempfile.TemporaryFile(buffering=0))
+    sink = _SINK[1]
+    os.lseek(sink.fileno(), 0, os.SEEK_SET)
+    os.ftruncate(sink.fileno(), 0)
+    return sink
+
+
 def _read_back(sink) -> str:
     if sink is None:
         return ""
     try:
-        sink.seek(0)
-        return sink.read(_KEEP_BYTES).decode("utf-8", "replace")
+        os.lseek(sink.fileno(), 0, os.SEEK_SET)
+        return os.read(sink.fileno(), _KEEP_BYTES).decode("utf-8", "replace")
     except OSError:
         return ""
-    finally:
-        sink.close()
 
 
 @contextmanager
@@ -144,7 +167,7 @@ def library_output(what: str, path: str | os.PathLike | None = None):
     what : str
         The operation, as an error line starts: ``"cannot read sky.exr"``.
     path : str or path, optional
-        The file, whose base name is dropped from the front of the lines caught.
+        The file, whose path (or base name) is dropped from the front of the lines caught.
 
     Yields
     ------
@@ -152,7 +175,7 @@ def library_output(what: str, path: str | os.PathLike | None = None):
         Filled when the block ends.
     """
     caught = Caught()
-    name = os.path.basename(os.fspath(path)) if path is not None else None
+    name = os.fspath(path) if path is not None else None
     failure = None
     python_text = io.StringIO()  # bindings that print through Python (OpenEXR's py::print)
     with _redirected() as sink:
