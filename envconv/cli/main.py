@@ -10,8 +10,8 @@ Exit statuses: 0 success; 2 bad usage (click's usage errors and envconv's own
 :class:`envconv.errors.UsageError`); 1 a run-time failure (any other
 :class:`envconv.errors.EnvconvError`: a missing or damaged file, a layout that does not fit);
 3 an internal error, a bug in envconv (one line naming the exception; set ``ENVCONV_DEBUG=1``
-for the traceback); 130 interrupted. Running out of memory is a run-time failure (1). Each error is one line on stderr; stdout carries results
-only.
+for the traceback); 130 interrupted. Running out of memory is a run-time failure (1). Each
+error is one line on stderr; stdout carries results only.
 """
 
 from __future__ import annotations
