@@ -73,3 +73,12 @@ def test_meaningful_lines_drop_prefixes_blanks_and_repeats():
     text = "x.exr: bad\n\n  x.exr: bad  \nWarning: Exception raised\nother\n"
     assert meaningful_lines(text, "x.exr") == ["bad", "Exception raised", "other"]
     assert meaningful_lines("/d/x.exr: bad\nx.exr: bad\n", "/d/x.exr") == ["bad"]  # as given, or base
+
+
+def test_envconv_log_lines_printed_meanwhile_pass_through(capfd):
+    """The CLI's log handler writes to descriptor 2: a warning logged during a read is not
+    taken for library output (nor demoted to debug)."""
+    with library_output("cannot read a.exr") as caught:
+        os.write(2, b"envconv: warning: part B is not read\nlibrary noise\n")
+    assert capfd.readouterr() == ("", "envconv: warning: part B is not read\n")
+    assert caught.lines() == ["library noise"]

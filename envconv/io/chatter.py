@@ -13,6 +13,9 @@ file while a read or write runs, then puts them back and deals with what was cau
   :class:`~envconv.errors.ImageIOError` "out of memory" naming the operation;
 * the block succeeded: each line caught is logged at debug level (``envconv -vv``).
 
+Lines envconv's own log printed meanwhile (they start ``envconv: ``, and the log handler
+writes to descriptor 2 too) are passed on to stderr as they are.
+
 Text that bindings print through Python's ``sys.stdout``/``sys.stderr`` (OpenEXR's module
 prints its pixel-read warning so) and Python warnings raised meanwhile (numpy's) are caught
 the same way. Captures nest, and threads
@@ -39,6 +42,8 @@ __all__ = ["library_output", "Caught", "meaningful_lines", "fold"]
 
 log = logging.getLogger(__name__)
 
+#: How envconv's own log lines start (the CLI's logging format).
+_OWN = "envconv: "
 _LOCK = threading.Lock()
 _DEPTH = 0
 #: At most this much caught output is kept (a library in a loop must not fill the disk or RAM).
@@ -54,8 +59,15 @@ class Caught:
         self.warnings: list[str] = []
 
     def lines(self, name: str | None = None) -> list[str]:
-        """The meaningful lines caught, deduplicated, in order (see :func:`meaningful_lines`)."""
-        return meaningful_lines("\n".join([self.text, *self.warnings]), name)
+        """The meaningful lines caught, deduplicated, in order (see :func:`meaningful_lines`),
+        but not envconv's own (:meth:`own_lines`)."""
+        text = "\n".join(line for line in self.text.splitlines() if not line.startswith(_OWN))
+        return meaningful_lines("\n".join([text, *self.warnings]), name)
+
+    def own_lines(self) -> list[str]:
+        """Lines envconv's own log printed meanwhile (its handler writes to descriptor 2):
+        they are passed on as they are, not taken for library output."""
+        return [line for line in self.text.splitlines() if line.startswith(_OWN)]
 
 
 def meaningful_lines(text: str, name: str | None = None) -> list[str]:
@@ -190,6 +202,8 @@ def library_output(what: str, path: str | os.PathLike | None = None):
         except BaseException as exc:  # folded below, once the descriptors are back
             failure = exc
     caught.text = _read_back(sink) + "\n" + python_text.getvalue()[:_KEEP_BYTES]
+    for line in caught.own_lines():  # a warning logged during the read stays a warning
+        print(line, file=sys.stderr)
     if failure is None:
         _report(caught, name)
         return
