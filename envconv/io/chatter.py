@@ -25,6 +25,7 @@ Capturing is skipped when the descriptors cannot be duplicated (closed streams).
 
 from __future__ import annotations
 
+import atexit
 import ctypes
 import functools
 import io
@@ -154,6 +155,7 @@ def _sink():
     global _SINK
     if _SINK is None or _SINK[0] != os.getpid():
         _SINK = (os.getpid(), tempfile.TemporaryFile(buffering=0))
+        atexit.register(_SINK[1].close)
     sink = _SINK[1]
     os.lseek(sink.fileno(), 0, os.SEEK_SET)
     os.ftruncate(sink.fileno(), 0)
