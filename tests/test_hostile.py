@@ -30,6 +30,7 @@ import resource  # noqa: E402
 import struct  # noqa: E402
 
 import pytest  # noqa: E402
+from hostile import litter  # noqa: E402
 
 
 def _oiio_write(path, pixels, pixel_type="float", attributes=None):
@@ -310,3 +311,24 @@ def test_equirect_aliases_are_latlong(tmp_path, alias):
     written, spec = _read_back(tmp_path / "latlong.exr")
     assert spec.get_string_attribute("envconv:layout") == "latlong"
     np.testing.assert_allclose(written, _read_back(source)[0], atol=1e-6)  # same size: the same map
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_a_truncated_file_in_a_batch_prints_nothing_of_the_libraries(tmp_path, jobs):
+    """In the workers too, OpenEXR's lines are caught: the failed file's report line carries
+    them, nothing else reaches stderr and stdout holds only the summary."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _noise_exr(folder / "good.exr", 8)
+    data = _noise_exr(tmp_path / "whole.exr").read_bytes()
+    (folder / "cut.exr").write_bytes(data[: len(data) * 2 // 3])
+    run = envconv("-v", "batch", folder, "-j", jobs, "resample", "--to", "latlong", "--size", "4",
+                  "write", tmp_path / "out" / "{stem}.exr")  # fmt: skip
+    assert run.returncode == 1 and "Traceback" not in run.stderr
+    assert all(line.startswith("envconv:") for line in run.stderr_lines), run.stderr
+    assert "EXR_ERR" not in run.stdout and "Warning" not in run.stdout, run.stdout
+    assert len(run.stdout.splitlines()) == 1 and "1 failed" in run.stdout
+    (failed,) = [line for line in run.stderr_lines if "cut.exr" in line]
+    assert "failed" in failed and "EXR_ERR" in failed  # OpenEXR's reason, folded in
+    assert (tmp_path / "out" / "good.exr").is_file() and not (tmp_path / "out" / "cut.exr").exists()
+    assert not litter(tmp_path)
