@@ -82,3 +82,29 @@ def test_envconv_log_lines_printed_meanwhile_pass_through(capfd):
         os.write(2, b"envconv: warning: part B is not read\nlibrary noise\n")
     assert capfd.readouterr() == ("", "envconv: warning: part B is not read\n")
     assert caught.lines() == ["library noise"]
+
+
+def test_captures_in_two_threads_leave_the_streams_as_they_were(capfd):
+    """Threads share the process's descriptors and sys.stdout: however two captures
+    interleave, both are put back (a dask worker runs tasks on several threads)."""
+    import sys
+    import threading
+
+    stdout, stderr = sys.stdout, sys.stderr
+    inside, leave = threading.Event(), threading.Event()
+
+    def other():
+        with library_output("b"):
+            inside.set()
+            leave.wait(5)
+
+    thread = threading.Thread(target=other)
+    with library_output("a"):
+        thread.start()
+        assert inside.wait(5)
+    leave.set()  # the first capture ended before the second
+    thread.join(5)
+    assert (sys.stdout, sys.stderr) == (stdout, stderr)
+    os.write(1, b"out\n")
+    print("printed")
+    assert capfd.readouterr().out == "out\nprinted\n"

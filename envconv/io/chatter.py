@@ -35,7 +35,7 @@ import sys
 import tempfile
 import threading
 import warnings
-from contextlib import contextmanager, redirect_stderr, redirect_stdout
+from contextlib import ExitStack, contextmanager, redirect_stderr, redirect_stdout
 
 from ..errors import EnvconvError, ImageIOError
 
@@ -114,8 +114,9 @@ def _flush_python() -> None:
 
 @contextmanager
 def _redirected():
-    """Descriptors 1 and 2 into a temporary file for the block; yields the file, or None
-    when another capture is already active (or the descriptors cannot be duplicated)."""
+    """Descriptors 1 and 2 into a temporary file for the block; yields (the file, or None
+    when another capture is already active or the descriptors cannot be duplicated; whether
+    this is the outermost capture)."""
     global _DEPTH
     with _LOCK:
         _DEPTH += 1
@@ -134,7 +135,7 @@ def _redirected():
                 for fd in saved:
                     os.close(fd)
                 saved, sink = [], None
-        yield sink if saved else None
+        yield (sink if saved else None), outer
     finally:
         if saved:
             _flush_c_stdio()
@@ -192,10 +193,12 @@ def library_output(what: str, path: str | os.PathLike | None = None):
     name = os.fspath(path) if path is not None else None
     failure = None
     python_text = io.StringIO()  # bindings that print through Python (OpenEXR's py::print)
-    with _redirected() as sink:
+    with _redirected() as (sink, outer), ExitStack() as streams:
+        if outer:  # sys.stdout/sys.stderr are process-wide too: swapped by the outermost only
+            streams.enter_context(redirect_stdout(python_text))
+            streams.enter_context(redirect_stderr(python_text))
         try:
-            with warnings.catch_warnings(record=True) as recorded, \
-                    redirect_stdout(python_text), redirect_stderr(python_text):
+            with warnings.catch_warnings(record=True) as recorded:
                 warnings.simplefilter("always")
                 try:
                     yield caught
