@@ -332,3 +332,18 @@ def test_a_truncated_file_in_a_batch_prints_nothing_of_the_libraries(tmp_path, j
     assert "failed" in failed and "EXR_ERR" in failed  # OpenEXR's reason, folded in
     assert (tmp_path / "out" / "good.exr").is_file() and not (tmp_path / "out" / "cut.exr").exists()
     assert not litter(tmp_path)
+
+
+@pytest.mark.parametrize("output", ["o.png", "o_{face}.jpg", "o.tif"])
+def test_nan_to_an_integer_format_prints_envconv_lines_only(tmp_path, output):
+    """numpy's RuntimeWarning (two lines: message and source) came out of the dither."""
+    source = tmp_path / "bad.exr"
+    pixels = np.full((16, 32, 3), 0.5, np.float32)
+    pixels[0, 0, 0], pixels[1, 1, 1] = np.nan, np.inf
+    _oiio_write(source, pixels)
+    layout = "cube-faces" if "{face}" in output else "latlong"
+    run = envconv("convert", source, tmp_path / output, "--to", layout, "--size", "8",
+                  "--bit-depth", "uint8")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert run.stderr_lines and all(line.startswith("envconv: warning: ") for line in run.stderr_lines), run.stderr
+    assert "RuntimeWarning" not in run.stderr

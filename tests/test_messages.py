@@ -58,3 +58,14 @@ def test_layout_names_aliases_and_families():
         get_layout("parabloid")
     with pytest.raises(LayoutError, match=r"unknown layout 'qqq' \(known: latlong"):
         get_layout("qqq")
+
+
+def test_a_python_warning_is_one_line():
+    import io
+
+    from envconv.cli.messages import show_warning
+
+    stream = io.StringIO()
+    show_warning("invalid value\n  encountered", RuntimeWarning, "/x/quantize.py", 136, stream)
+    assert stream.getvalue() == (
+        "envconv: warning: RuntimeWarning: invalid value encountered (quantize.py:136)\n")

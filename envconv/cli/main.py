@@ -223,6 +223,11 @@ def compose_steps(results, verbose: int, threads: int | None) -> None:
 
 def main() -> None:
     """Console-script entry point."""
+    import warnings
+
+    from .messages import show_warning
+
+    warnings.showwarning = show_warning  # a Python warning is one line too
     cli.main(prog_name="envconv", standalone_mode=True)
 
 

@@ -3,6 +3,7 @@
 :mod:`envconv.cli.main` turns every error into one line on stderr; this module shapes that
 line. :func:`one_line` folds a message of several lines (click's "Choose from:" lists, a
 library's own lines) into one; :func:`did_you_mean` finds the names close to a typo;
+:func:`show_warning` prints a Python warning (numpy's) as one ``envconv: warning:`` line;
 :func:`step_typo` finds, in the arguments of a chained step, a word that is a misspelt step name
 (``envconv read sky.exr resampel --to latlong``), which click would otherwise report as an
 unknown option of the step before it.
@@ -11,9 +12,11 @@ unknown option of the step before it.
 from __future__ import annotations
 
 import difflib
+import os
 import re
+import sys
 
-__all__ = ["one_line", "did_you_mean", "step_typo"]
+__all__ = ["one_line", "did_you_mean", "step_typo", "show_warning"]
 
 
 def one_line(message: str) -> str:
@@ -41,3 +44,16 @@ def step_typo(args: list[str], names) -> str | None:
         if difflib.get_close_matches(token.lower(), names, n=1, cutoff=0.75):
             return token
     return None
+
+
+def show_warning(message, category, filename, lineno, file=None, line=None) -> None:
+    """A Python warning as one line, ``envconv: warning: Category: text (file.py:N)``
+    (``warnings.showwarning`` of the command line; the default prints the source line too)."""
+    stream = file if file is not None else sys.stderr
+    if stream is None:
+        return
+    where = f"{os.path.basename(str(filename))}:{lineno}"
+    try:
+        stream.write(f"envconv: warning: {category.__name__}: {one_line(str(message))} ({where})\n")
+    except (OSError, ValueError):
+        pass
