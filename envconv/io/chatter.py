@@ -194,16 +194,17 @@ def library_output(what: str, path: str | os.PathLike | None = None):
     failure = None
     python_text = io.StringIO()  # bindings that print through Python (OpenEXR's py::print)
     with _redirected() as (sink, outer), ExitStack() as streams:
-        if outer:  # sys.stdout/sys.stderr are process-wide too: swapped by the outermost only
-            streams.enter_context(redirect_stdout(python_text))
+        recorded: list = []
+        if outer:  # sys.stdout/sys.stderr and warning filters are process-wide: the outermost
+            streams.enter_context(redirect_stdout(python_text))  # capture takes them alone
             streams.enter_context(redirect_stderr(python_text))
+            recorded = streams.enter_context(warnings.catch_warnings(record=True))
+            warnings.simplefilter("always")
         try:
-            with warnings.catch_warnings(record=True) as recorded:
-                warnings.simplefilter("always")
-                try:
-                    yield caught
-                finally:
-                    caught.warnings = [f"{w.category.__name__}: {w.message}" for w in recorded]
+            try:
+                yield caught
+            finally:
+                caught.warnings = [f"{w.category.__name__}: {w.message}" for w in recorded]
         except BaseException as exc:  # folded below, once the descriptors are back
             failure = exc
     caught.text = _read_back(sink) + "\n" + python_text.getvalue()[:_KEEP_BYTES]
