@@ -30,8 +30,10 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from . import io
 from .errors import EnvconvError, ImageIOError, UsageError
 from .io import FORMATS
+from .outputs import check_outputs, input_files
 from .pipeline import Pipeline, Read, Resample, Write, path_variables
 
 __all__ = [
@@ -103,30 +105,40 @@ def expand_inputs(patterns: Iterable[str]) -> list[str]:
     return list(found)
 
 
-def make_jobs(inputs: Iterable[str | None], pipeline: Pipeline) -> list[Job]:
+def make_jobs(inputs: Iterable[str | None], pipeline: Pipeline, no_clobber: bool = False) -> list[Job]:
     """One job per input, with relative write paths made absolute against the current
-    directory; raise UsageError when two jobs would write the same file."""
-    steps = [_absolute_write(s) for s in pipeline.steps]
+    directory, every write refusing existing files when ``no_clobber``.
+
+    Raises UsageError, before any work, when an output is an input of the batch (any job's,
+    through links too), when two outputs share a path (in one job or across jobs), and with
+    ``no_clobber`` when an output exists (:mod:`envconv.outputs`). Outputs whose path needs a
+    file header (``{size}`` without a resample size) are checked when their job runs.
+    """
+    steps = [_absolute_write(s, no_clobber) for s in pipeline.steps]
     rebased = Pipeline(steps, pipeline.variables)
     jobs = [Job(None if i is None else os.path.abspath(i), rebased) for i in inputs]
-    seen: dict[str, str] = {}
+    outputs, read = [], []
     for job in jobs:
-        for path in _static_outputs(job):
-            if path in seen and seen[path] != job.name:
-                raise UsageError(f"{seen[path]} and {job.name} would both write {path}; "
-                                 "put {stem} or {dir} in the output path")  # fmt: skip
-            seen[path] = job.name
+        for step in job.pipeline.bound(job.input):
+            if isinstance(step, Read):
+                read += input_files(step.params["path"], step.params.get("layout"),
+                                    step.params.get("faces"))  # fmt: skip
+        outputs += [(path, refuse, job.name) for path, refuse in _static_outputs(job)]
+    check_outputs(outputs, read)
     return jobs
 
 
-def _absolute_write(step):
-    if isinstance(step, Write) and step.params["base"] is None:
-        return Write(**{**step.params, "base": os.getcwd()})
+def _absolute_write(step, no_clobber: bool):
+    if isinstance(step, Write) and (step.params["base"] is None or no_clobber):
+        base = step.params["base"] if step.params["base"] is not None else os.getcwd()
+        return Write(**{**step.params, "base": base,
+                        "no_clobber": step.params["no_clobber"] or no_clobber})  # fmt: skip
     return step
 
 
-def _static_outputs(job: Job) -> list[str]:
-    """Output paths that follow from names alone (skips those that need a file header)."""
+def _static_outputs(job: Job) -> list[tuple[str, bool]]:
+    """(path, no_clobber) of the outputs that follow from names alone (those that need a file
+    header are left out), previews included."""
     out, to, sized, variables = [], None, False, path_variables(job.input)
     for step in job.pipeline.bound(job.input):
         if isinstance(step, Read):
@@ -134,16 +146,28 @@ def _static_outputs(job: Job) -> list[str]:
         elif isinstance(step, Resample):
             to, sized = step.params["to"], step.params["size"]
         elif isinstance(step, Write):
-            values = {**variables, **job.pipeline.variables}
+            values = dict(variables)
             if to is not None:
                 values["layout"] = to
             if sized:
                 values["size"] = sized
-            try:
-                out.append(step.target(values))
-            except UsageError:
-                continue
+            for key in ("path", "preview") if step.params["preview"] else ("path",):
+                try:
+                    path = step.target(values, key, job.pipeline.variables)
+                    files = _named_files(path, to, step.options.get("faces"))
+                except EnvconvError:
+                    continue
+                out += [(f, step.params["no_clobber"]) for f in files]
     return out
+
+
+def _named_files(path: str, layout: str | None, faces) -> list[str]:
+    """The files of one write path when they follow from its name ({level} needs a header)."""
+    if "{level}" in path:
+        return []
+    if "{face}" in path:
+        return [] if layout is None else io.output_paths(layout, path, faces=faces)
+    return [path]
 
 
 def worker_threads(jobs: int, cores: int | None = None) -> int:

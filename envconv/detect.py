@@ -27,7 +27,7 @@ import numpy as np
 from .errors import LayoutError
 from .layouts import LAYOUTS, Layout, get_layout
 
-__all__ = ["detect_layout", "find_layout", "place_image", "misfit_message", "Found"]
+__all__ = ["detect_layout", "find_layout", "place_image", "misfit_message", "tagged_guard", "Found"]
 
 _UNIQUE_ASPECTS = {
     (3, 4): "cube-vcross",
@@ -51,12 +51,17 @@ class Found(NamedTuple):
     reason: str
 
 
+def tagged_guard(metadata: dict[str, Any]) -> int:
+    """The guard ring G a file's ``envconv:guard`` tag records (0 when untagged)."""
+    return int(metadata.get("envconv:guard", 0) or 0)
+
+
 def find_layout(
     width: int, height: int, metadata: dict[str, Any], pixels: np.ndarray | None = None
 ) -> Found:
     """The layout of a ``width`` × ``height`` image with this metadata, never raising."""
     tag = metadata.get("envconv:layout")
-    guard = int(metadata.get("envconv:guard", 0) or 0)
+    guard = tagged_guard(metadata)
     if tag in LAYOUTS:
         return Found(get_layout(tag), guard, (tag,), f"envconv:layout tag {tag}")
     envmap = str(metadata.get("envmap", "")).lower()
@@ -181,9 +186,7 @@ def place_image(
         origin = f"named by its {detected.reason.rsplit(' ', 1)[0]}"  # "… envconv:layout tag"
     else:
         found = get_layout(layout)
-        guard = int(metadata.get("envconv:guard", 0) or 0)
-        if metadata.get("envconv:layout") != found.name:
-            guard = 0
+        guard = tagged_guard(metadata) if metadata.get("envconv:layout") == found.name else 0
         origin = "given by --from"
     guard >>= level + int(metadata.get("envconv:level", 0) or 0)  # a level's guard is G >> k
     try:

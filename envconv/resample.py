@@ -55,6 +55,7 @@ from .sampling import (
     MAX_SAMPLES,
     auto_samples,
     check_guard,
+    check_mips,
     check_samples,
     default_size,
 )
@@ -254,17 +255,7 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
 
 def _mip_filter(mips):
     """(mips for the chain builder, True for GGX) of ``convert``'s ``mips``."""
-    if isinstance(mips, str):
-        name, _, count = mips.partition(":")
-        if name == "box":
-            return (int(count) if count else True), False
-        if name != "ggx":
-            raise UsageError(f"mips must be a number of levels, 'box' or 'ggx', got {mips!r}")
-        try:
-            return (int(count) if count else True), True
-        except ValueError:
-            raise UsageError(f"expected ggx:K with K a number of levels, got {mips!r}") from None
-    return mips, False
+    return check_mips(mips)
 
 
 def source_rips(

@@ -1,4 +1,4 @@
-"""Colour flow through reading, resampling and writing (envconv.colorflow, io, CLI).
+"""Colour flow through reading, resampling and writing (envconv.color, envconv.prepare, envconv.io.encode, the CLI).
 
 Truth comes from outside the code under test: integer codes chosen by the test, OCIO
 processors built here with PyOpenColorIO, the sRGB formulas of IEC 61966-2-1, hand counts

@@ -1,4 +1,4 @@
-"""Tests for envconv.depth: quantizing, dither, clip reports, NaN/Inf, exposure, negatives.
+"""Tests for envconv.quantize, envconv.prepare and exposure: quantizing, dither, clip reports, NaN/Inf, negatives.
 
 Truth is hand-computed counts and codes, OIIO's own fixNonFinite, and statistics of the dither.
 """

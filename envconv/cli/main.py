@@ -3,7 +3,7 @@
 ``envconv`` is a chained group: ``envconv read IN resample … write OUT resample … write OUT2``.
 Each command of a chain parses its own arguments up to the next command name (options may
 follow positional arguments, as in ``write out.exr --bit-depth half``); the result callback
-composes the steps (:mod:`envconv.cli.chain`). ``convert``, ``info``, ``layouts`` and ``run``
+composes the steps (:mod:`envconv.cli.compose`). ``convert``, ``info``, ``layouts`` and ``run``
 are whole commands that cannot be chained with others.
 
 Exit statuses: 0 success; 2 bad usage (click's usage errors and envconv's own
@@ -197,6 +197,9 @@ def cli(verbose: int, threads: int | None) -> None:
 
     Chained steps: read, rotate, exposure, colorspace, resample, write. Each resample starts
     from the source (the last read and the steps that follow it), never from another output.
+    Before any work a run is refused if an output is an input (also through a link) or two
+    outputs share a path, and with -n (convert, write, run, batch) if an output exists;
+    otherwise outputs are replaced atomically (docs/shell.md).
     Options of envconv itself (-v, --threads) come before the command:
     envconv --threads 1 convert ...
     """
@@ -209,16 +212,6 @@ def cli(verbose: int, threads: int | None) -> None:
         from ..kernels import set_threads
 
         set_threads(threads)
-
-
-@cli.result_callback()
-def compose_steps(results, verbose: int, threads: int | None) -> None:
-    """Run the steps of a chain (standalone commands return None and have already run)."""
-    steps = [r for r in results if r is not None]
-    if steps:
-        from .chain import run_chain
-
-        run_chain(steps)
 
 
 def main() -> None:

@@ -9,8 +9,8 @@ px nx py ny pz nz, or front back. ``faces=`` names another program's skybox file
 orientations (Quake's ft bk lf rt up dn, Unity's Front …: :mod:`envconv.facesets`); reading
 finds the set from the files that exist when it is not given (:mod:`envconv.face_files`).
 
-This module reads maps (files through :mod:`envconv.file_io`); writing lives in
-:mod:`envconv.io_write` (every output goes to a temporary file renamed into place, so a failure
+This module reads maps (files through :mod:`envconv.io.files`); writing lives in
+:mod:`envconv.io.writer` (every output goes to a temporary file renamed into place, so a failure
 never leaves a partial file, and inputs are never opened for writing) and is re-exported here.
 """
 
@@ -75,14 +75,14 @@ def read(
         OpenColorIO config; default ``$OCIO``, else ``ocio://default``.
     part : str, optional
         Part of a multi-part file to read alone (its name, or its index); default every part
-        that is an image of the first part's windows (see :mod:`envconv.file_io`).
+        that is an image of the first part's windows (see :mod:`envconv.io.files`).
     faces : str, optional
         Face set of a ``{face}`` path of six skybox files (``quake``, ``unity-6sided``,
         ``threejs``, ``godot``, ``unreal``, ``envconv``; see :mod:`envconv.facesets`). Each
         file is turned into envconv's face, so the result is an ordinary ``cube-faces`` map.
         Default: found from the file names; several matching sets are a LayoutError.
 
-    The map is the file's display window (:mod:`envconv.file_io`). Where the data window
+    The map is the file's display window (:mod:`envconv.io.files`). Where the data window
     leaves holes, every channel is 0 there, an alpha channel ``A`` (1 elsewhere) is added
     when the file has none, and ``EnvMap.valid`` marks them. Pixels are converted to linear
     Rec.709 by :func:`envconv.color.to_working`. A lat-long stored with edge-aligned
@@ -192,11 +192,9 @@ def mip_levels(path: str | os.PathLike, part: str | None = None) -> list[tuple[i
 
     Multi-file layouts (``{face}`` in the path) report the levels of their first file.
     """
-    path = os.fspath(path)
-    if "{face}" in path:
-        from .face_files import find_face_files
+    from .face_files import first_file
 
-        path = find_face_files(path).paths[0]
+    path = first_file(path)
     index = read_file_header(path, 0, part).chosen[0]
     with _open_input(path) as inp:
         sizes: list[tuple[int, int]] = []

@@ -219,7 +219,9 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
     with parts is written as a multi-part OpenEXR file, one part per entry of ``parts``."""
     fmt = format_of(target)[0]
     if len(images) > 1:
-        full = max(images[0].shape[:2]).bit_length()
+        from ..mips import full_level_count
+
+        full = full_level_count(images[0].shape[1], images[0].shape[0])
         if fmt not in ("openexr", "tiff"):
             raise ImageIOError(
                 f"cannot write {target}: {fmt} holds one image, not {len(images)} MIP levels; "
