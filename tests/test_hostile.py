@@ -280,7 +280,8 @@ def test_truncated_input_in_a_chain_and_in_info_keeps_stdout_clean(tmp_path):
 
 def test_out_of_memory_is_one_line_exit_1(tmp_path):
     """8192x4096 zip EXR of zeros (200 KB on disk, 400 MB as float) under a 750 MB address
-    space: 'out of memory', exit 1 (it was 'internal error: MemoryError', exit 3)."""
+    space: 'out of memory', exit 1 (it was 'internal error: MemoryError', exit 3), for
+    convert and info --stats; info alone reads the header and answers."""
     import OpenImageIO as oiio
 
     limit = 750 * 2**20
@@ -306,6 +307,10 @@ def test_out_of_memory_is_one_line_exit_1(tmp_path):
     run = envconv("convert", source, tmp_path / "o.exr", "--to", "cube-vcross", "--size", "8",
                   preexec_fn=small_address_space)  # fmt: skip
     assert_failed_cleanly(run, 1, tmp_path, message="out of memory")
+    stats = envconv("info", source, "--stats", preexec_fn=small_address_space)
+    assert_failed_cleanly(stats, 1, tmp_path, message="out of memory")
+    header = envconv("info", source, "--json", preexec_fn=small_address_space)  # no pixel read
+    assert header.returncode == 0 and header.stderr == "" and '"width": 8192' in header.stdout
     assert_untouched(before)
 
 
