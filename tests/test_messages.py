@@ -69,3 +69,9 @@ def test_a_python_warning_is_one_line():
     show_warning("invalid value\n  encountered", RuntimeWarning, "/x/quantize.py", 136, stream)
     assert stream.getvalue() == (
         "envconv: warning: RuntimeWarning: invalid value encountered (quantize.py:136)\n")
+
+
+def test_layouts_lists_the_aliases():
+    lines = run_cli(["layouts"]).stdout.splitlines()
+    (latlong,) = [line for line in lines if line.startswith("latlong ")]
+    assert latlong.endswith("(also equirect, equirectangular)")
