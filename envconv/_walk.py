@@ -19,7 +19,7 @@ from types import SimpleNamespace
 from typing import Any
 
 from . import io
-from .errors import EnvconvError, UsageError
+from .errors import EnvconvError, ImageIOError, UsageError
 from .layouts import get_layout
 from .steps import (
     _IO_PLACEHOLDERS,
@@ -289,7 +289,11 @@ class Walk:
         targets = [path, *([preview] if preview else [])]
         if step.params["makedirs"]:
             for directory in {os.path.dirname(os.path.abspath(f)) for f in targets}:
-                os.makedirs(directory, exist_ok=True)
+                try:
+                    os.makedirs(directory, exist_ok=True)
+                except OSError as exc:  # a regular file on the way, /proc, no permission
+                    raise ImageIOError(f"cannot write {path}: cannot make folder {directory}: "
+                                       f"{exc.strerror or exc}") from None  # fmt: skip
         notes: list[str] = []
         files = io.write(env, path, warnings=notes, **options)
         self._warn(notes)

@@ -10,7 +10,10 @@ Code that cannot be interrupted (a write inside OpenImageIO, a read of a huge fi
 the run up; a watchdog thread, woken by the signal itself (``signal.set_wakeup_fd``), waits
 :data:`GRACE` seconds and then removes this process's temporary files
 (:func:`envconv.io.temps.live_temps`), prints the one line and ends the process with the same
-status. A second signal during the unwinding is left to the watchdog.
+status. A second signal during the unwinding is left to the watchdog. The line goes to a copy
+of descriptor 2 taken at :func:`install`, so a capture of library output
+(:mod:`envconv.io.chatter`, which points descriptor 2 at a file during reads and writes) cannot
+swallow it.
 """
 
 from __future__ import annotations
@@ -25,7 +28,7 @@ __all__ = ["Interrupted", "install", "exit_status", "describe", "done", "GRACE"]
 GRACE = 0.8
 
 _NAMES = {signal.SIGINT: "interrupted (SIGINT)", signal.SIGTERM: "terminated (SIGTERM)"}
-_state = {"signum": None, "handled": False, "prefix": "envconv: error: "}
+_state = {"signum": None, "handled": False, "prefix": "envconv: error: ", "stderr": 2}
 _report_lock = threading.Lock()
 
 
@@ -75,7 +78,7 @@ def _emergency(signum: int) -> None:
         forget(path)
     if done():
         try:
-            os.write(2, f"{_state['prefix']}{_NAMES.get(signum, 'interrupted')}\n".encode())
+            os.write(_state["stderr"], f"{_state['prefix']}{_NAMES.get(signum, 'interrupted')}\n".encode())
         except OSError:
             pass
     os._exit(128 + signum)
@@ -107,6 +110,10 @@ def install(sigint: bool = True, quiet: bool = False) -> None:
     if threading.current_thread() is not threading.main_thread():
         return
     _state["handled"] = quiet
+    try:  # the terminal's stderr, kept: a capture (envconv.io.chatter) may hold descriptor 2
+        _state["stderr"] = os.dup(2)
+    except OSError:
+        pass
     signal.signal(signal.SIGTERM, _handler)
     signal.signal(signal.SIGINT, _handler if sigint else signal.SIG_IGN)
     if hasattr(signal, "pthread_sigmask"):  # POSIX: a batch worker starts with SIGINT blocked

@@ -135,7 +135,8 @@ def _dither_colour(codes: np.ndarray, scale: float, start: int = 0) -> None:
         block = codes[y0 : y0 + rows]
         noise = _tpdf_noise(start + y0 * w * c, block.size).reshape(block.shape)[..., sl]
         col = block[..., sl]
-        inside = (col > 0) & (col < scale) & (np.abs(col - np.rint(col)) > _ON_GRID)
+        with np.errstate(invalid="ignore"):  # NaN/Inf codes: never inside, nothing to warn
+            inside = (col > 0) & (col < scale) & (np.abs(col - np.rint(col)) > _ON_GRID)
         block[..., sl] = np.where(inside, col + noise, col)
 
 def merge_reports(reports: list[ClipReport]) -> ClipReport:

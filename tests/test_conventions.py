@@ -429,7 +429,7 @@ def test_cli_conventions(tmp_path):
     bad = runner.invoke(cli, [*args, "--in-convention", "blender", "--from", "sphere"])
     assert bad.exit_code != 0
     bad = runner.invoke(cli, [*args, "--out-convention", "nope"])
-    assert bad.exit_code == 1 and "unknown convention" in bad.output
+    assert bad.exit_code == 2 and "unknown convention" in bad.output  # a bad option value: usage
     assert "Traceback" not in bad.output
 
 

@@ -140,7 +140,7 @@ def test_validation_errors_name_file_step_and_key(hdri, tmp_path, steps, needle)
         load_graph(path)
     assert str(path) in str(info.value) and needle in str(info.value)
     result = run_cli(["run", path])
-    assert result.exit_code == 1
+    assert result.exit_code == 2  # a graph that does not validate is bad usage
     assert needle in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out.exr").exists()
 

@@ -7,9 +7,18 @@ inputs and old outputs untouched. Sections are grouped by what is attacked.
 
 from __future__ import annotations
 
+import json
+import os
+import resource
+import signal
+import struct
+import subprocess
+import time
+
 import numpy as np
+import pytest
 from conftest import write_plain
-from hostile import Run, assert_failed_cleanly, assert_untouched, envconv, snapshot
+from hostile import ENVCONV, Run, assert_failed_cleanly, assert_untouched, envconv, litter, snapshot
 
 # --- outputs onto inputs ---------------------------------------------------------------------
 
@@ -27,9 +36,7 @@ def test_convert_refuses_to_write_onto_its_input(tmp_path):
 # --- engine: outputs onto inputs, duplicate outputs, -n/--no-clobber, malformed graph files ---
 # Usage refusals exit 2 once helper "messages" lands UsageError -> 2; until then 1 is accepted.
 
-import os  # noqa: E402
 
-import pytest  # noqa: E402
 
 
 def _map(path, value=1.0):
@@ -277,13 +284,7 @@ def test_ulimit_is_respected(tmp_path):
 # snapshot taken before the run; outputs read back and compared with the analytic constant of
 # their input; temp files found by name (hostile.litter).
 
-import json  # noqa: E402
-import resource  # noqa: E402
-import signal  # noqa: E402
-import subprocess  # noqa: E402
-import time  # noqa: E402
 
-from hostile import ENVCONV, litter  # noqa: E402  (os, pytest: imported above)
 
 
 def _noise(path, height=64, seed=0):
@@ -573,3 +574,329 @@ def test_one_and_two_workers_write_identical_bytes(tmp_path):
         time.sleep(1.05)  # another second: without a fixed date the stamps would differ
     assert len(outputs[1]) == 12 and sorted(outputs[1]) == sorted(outputs[2])
     assert [name for name in outputs[1] if outputs[1][name] != outputs[2][name]] == []
+
+
+# --- messages: hostile inputs and arguments, exit statuses, library chatter, did-you-mean ---
+
+
+
+
+def _oiio_write(path, pixels, pixel_type="float", attributes=None):
+    """An image written by OpenImageIO directly (any pixel type; no envconv tags)."""
+    import OpenImageIO as oiio
+
+    height, width, nch = pixels.shape
+    spec = oiio.ImageSpec(width, height, nch, getattr(oiio, pixel_type.upper()))
+    for name, value in (attributes or {}).items():
+        spec.attribute(name, value)
+    out = oiio.ImageOutput.create(str(path))
+    assert out.open(str(path), spec) and out.write_image(pixels) and out.close()
+
+
+def _read_back(path):
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(str(path))
+    spec = buf.spec()
+    return buf.get_pixels(oiio.FLOAT).reshape(spec.height, spec.width, spec.nchannels), spec
+
+
+def _noise_exr(path, height=32):
+    """A zip EXR of noise (it does not compress away, so a cut falls in the pixels)."""
+    noise = np.random.default_rng(7).uniform(0, 1, (height, 2 * height, 3)).astype(np.float32)
+    _oiio_write(path, noise, attributes={"compression": "zip"})
+    return path
+
+
+def _with_windows(source, target, box):
+    """``source`` (an EXR) with both windows rewritten to ``box`` = (xmin, ymin, xmax, ymax)."""
+    data = bytearray(source.read_bytes())
+    for name in (b"dataWindow\0box2i\0", b"displayWindow\0box2i\0"):
+        at = data.index(name) + len(name) + 4
+        data[at : at + 16] = struct.pack("<4i", *box)
+    target.write_bytes(bytes(data))
+    return target
+
+
+def _convert_fails(tmp_path, source, status, message, *extra):
+    """Convert ``source`` and check the clean failure; the input untouched, no output."""
+    out = tmp_path / "out" / "o.exr"
+    out.parent.mkdir(exist_ok=True)
+    before = snapshot(source)
+    run = envconv("convert", source, out, "--to", "cube-hstrip", "--size", "4", *extra)
+    assert_failed_cleanly(run, status, tmp_path, message=message)
+    assert_untouched(before)
+    assert not out.exists()
+    return run
+
+
+def _srgb_to_linear(code):
+    c = code / 255.0
+    return c / 12.92 if c <= 0.04045 else ((c + 0.055) / 1.055) ** 2.4
+
+
+@pytest.mark.parametrize("kind, message", [
+    ("missing", "not found"), ("empty", "cannot read"), ("random", "cannot read"),
+    ("truncated", "cannot read"), ("directory", "directory"), ("zero", "cannot read"),
+    ("huge", "cannot read"),
+])  # fmt: skip
+def test_unreadable_inputs_fail_in_one_line(tmp_path, kind, message):
+    """Missing, empty, random, truncated, a directory, 0x0 (windows patched: no library
+    writes one) and a header claiming 200000x100000: exit 1, one line, nothing on stdout.
+    A truncated EXR made OpenEXR print on stdout and stderr before envconv's line."""
+    source = tmp_path / "in.exr"
+    if kind == "empty":
+        source.write_bytes(b"")
+    elif kind == "random":
+        source.write_bytes(np.random.default_rng(3).bytes(5000))
+    elif kind == "truncated":
+        data = _noise_exr(tmp_path / "whole.exr").read_bytes()
+        source.write_bytes(data[: len(data) * 2 // 3])
+    elif kind == "directory":
+        source = tmp_path / "folder.exr"
+        source.mkdir()
+    elif kind in ("zero", "huge"):
+        box = (0, 0, -1, -1) if kind == "zero" else (0, 0, 199999, 99999)
+        _with_windows(_noise_exr(tmp_path / "whole.exr", 8), source, box)
+    _convert_fails(tmp_path, source, 1, message)
+
+
+def test_truncated_input_in_a_chain_and_in_info_keeps_stdout_clean(tmp_path):
+    data = _noise_exr(tmp_path / "whole.exr").read_bytes()
+    source = tmp_path / "cut.exr"
+    source.write_bytes(data[: len(data) * 2 // 3])
+    run = envconv("read", source, "resample", "--to", "latlong", "--size", "4", "write", tmp_path / "o.exr")
+    assert_failed_cleanly(run, 1, tmp_path, message="cut.exr")
+    assert_failed_cleanly(envconv("info", source, "--stats"), 1, tmp_path, message="cut.exr")
+    header = envconv("info", source, "--json")  # the header is whole: info needs no pixel
+    assert header.returncode == 0 and header.stderr == "" and '"width": 64' in header.stdout
+
+
+def test_out_of_memory_is_one_line_exit_1(tmp_path):
+    """8192x4096 zip EXR of zeros (200 KB on disk, 400 MB as float) under a 750 MB address
+    space: 'out of memory', exit 1 (it was 'internal error: MemoryError', exit 3), for
+    convert and info --stats; info alone reads the header and answers."""
+    import OpenImageIO as oiio
+
+    limit = 750 * 2**20
+
+    def small_address_space():
+        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
+
+    small = _noise_exr(tmp_path / "small.exr", 8)
+    baseline = envconv("convert", small, tmp_path / "s.exr", "--to", "latlong", "--size", "4",
+                       preexec_fn=small_address_space)  # fmt: skip
+    if baseline.returncode != 0:
+        pytest.skip(f"envconv does not start in {limit >> 20} MB here: {baseline.stderr[-200:]}")
+    source = tmp_path / "big.exr"
+    spec = oiio.ImageSpec(8192, 4096, 3, oiio.HALF)
+    spec.attribute("compression", "zip")
+    out = oiio.ImageOutput.create(str(source))
+    assert out.open(str(source), spec)
+    rows = np.zeros((512, 8192, 3), np.float16)
+    for y in range(0, 4096, 512):
+        assert out.write_scanlines(y, y + 512, 0, rows)
+    assert out.close()
+    before = snapshot(source)
+    run = envconv("convert", source, tmp_path / "o.exr", "--to", "cube-vcross", "--size", "8",
+                  preexec_fn=small_address_space)  # fmt: skip
+    assert_failed_cleanly(run, 1, tmp_path, message="out of memory")
+    stats = envconv("info", source, "--stats", preexec_fn=small_address_space)
+    assert_failed_cleanly(stats, 1, tmp_path, message="out of memory")
+    header = envconv("info", source, "--json", preexec_fn=small_address_space)  # no pixel read
+    assert header.returncode == 0 and header.stderr == "" and '"width": 8192' in header.stdout
+    assert_untouched(before)
+
+
+@pytest.mark.parametrize("height, width, message", [
+    (1, 1, "--from"), (1, 3, "matches no layout"), (7, 13, "matches no layout"),
+])  # fmt: skip
+def test_images_no_layout_fits_fail_in_one_line(tmp_path, height, width, message):
+    source = tmp_path / "in.exr"
+    _oiio_write(source, np.ones((height, width, 3), np.float32))
+    _convert_fails(tmp_path, source, 1, message)
+
+
+def test_a_1x1_image_converts_with_from(tmp_path):
+    source, out = tmp_path / "one.exr", tmp_path / "o.exr"
+    _oiio_write(source, np.full((1, 1, 3), 0.25, np.float32))
+    run = envconv("convert", source, out, "--from", "sphere", "--to", "latlong", "--size", "2")
+    assert (run.returncode, run.stdout, run.stderr) == (0, f"{out}\n", "")
+    pixels, _ = _read_back(out)
+    np.testing.assert_allclose(pixels, 0.25, rtol=1e-3)  # a constant sky stays constant
+
+
+def test_nan_inf_and_negative_pixels_convert_with_a_warning(tmp_path):
+    source, out = tmp_path / "bad.exr", tmp_path / "o.exr"
+    pixels = np.full((16, 32, 3), 0.5, np.float32)
+    pixels[0, 0, 0], pixels[1, 1, 1], pixels[2, 2, 2] = np.nan, np.inf, -1.0
+    _oiio_write(source, pixels)
+    before = snapshot(source)
+    run = envconv("convert", source, out, "--to", "latlong", "--size", "16")
+    assert run.returncode == 0 and run.stdout == f"{out}\n", run.stderr
+    assert "Traceback" not in run.stderr and len(run.stderr_lines) == 1
+    assert run.stderr_lines[0].startswith("envconv: warning:") and "NaN" in run.stderr_lines[0]
+    assert_untouched(before)
+    written, _ = _read_back(out)
+    assert written.shape == (16, 32, 3)
+    assert np.isclose(written[8:, :, :], 0.5).all()  # far from the bad pixels: the sky as it was
+    # NaN clamped or kept (--fix-nonfinite none) and negative values kept, not clipped away
+    assert np.nanmin(written[..., 2]) < 0
+
+
+@pytest.mark.parametrize("channels", [1, 2, 4, 5])
+def test_any_channel_count_converts(tmp_path, channels):
+    source, out = tmp_path / "in.exr", tmp_path / "o.exr"
+    values = np.linspace(0.25, 2.0, channels, dtype=np.float32)
+    _oiio_write(source, np.ones((8, 16, channels), np.float32) * values)
+    run = envconv("convert", source, out, "--to", "cube-hstrip", "--size", "4")
+    assert (run.returncode, run.stdout, run.stderr) == (0, f"{out}\n", "")
+    written, spec = _read_back(out)
+    assert spec.nchannels == channels
+    np.testing.assert_allclose(written.reshape(-1, channels).min(0), values, rtol=1e-3)
+    np.testing.assert_allclose(written.reshape(-1, channels).max(0), values, rtol=1e-3)
+
+
+@pytest.mark.parametrize("name, pixel_type, code, expected", [
+    ("in.exr", "half", 0.75, 0.75),
+    ("in.png", "uint8", 128, _srgb_to_linear(128)),
+    ("in.tif", "uint16", 30000, _srgb_to_linear(30000 / 65535 * 255)),
+])  # fmt: skip
+def test_half_uint8_and_uint16_inputs_convert(tmp_path, name, pixel_type, code, expected):
+    """Integer files are sRGB-encoded by default (docs/color.md): the EXR written holds the
+    decoded linear value."""
+    source, out = tmp_path / name, tmp_path / "o.exr"
+    dtype = {"half": np.float16, "uint8": np.uint8, "uint16": np.uint16}[pixel_type]
+    _oiio_write(source, np.full((8, 16, 3), code, dtype), pixel_type)
+    run = envconv("convert", source, out, "--to", "cube-hstrip", "--size", "4")
+    assert (run.returncode, run.stdout, run.stderr) == (0, f"{out}\n", "")
+    written, _ = _read_back(out)
+    np.testing.assert_allclose(written, expected, rtol=2e-3)
+
+
+def test_a_png_named_exr_is_read_by_its_content(tmp_path):
+    source, out = tmp_path / "photo.exr", tmp_path / "o.exr"
+    _oiio_write(tmp_path / "photo.png", np.full((8, 16, 3), 200, np.uint8), "uint8")
+    (tmp_path / "photo.png").rename(source)
+    run = envconv("convert", source, out, "--to", "cube-hstrip", "--size", "4")
+    assert (run.returncode, run.stdout, run.stderr) == (0, f"{out}\n", "")
+    np.testing.assert_allclose(_read_back(out)[0], _srgb_to_linear(200), rtol=2e-3)
+
+
+def test_unicode_paths(tmp_path):
+    source, out = tmp_path / "ciel étoilé ☀.exr", tmp_path / "sortie 出力" / "立方体 ü.exr"
+    out.parent.mkdir()
+    _oiio_write(source, np.full((8, 16, 3), 0.5, np.float32))
+    run = envconv("convert", source, out, "--to", "cube-hstrip", "--size", "4")
+    assert (run.returncode, run.stdout, run.stderr) == (0, f"{out}\n", "")
+    np.testing.assert_allclose(_read_back(out)[0], 0.5, rtol=1e-3)
+
+
+@pytest.mark.parametrize("where", ["under-a-file", "proc"])
+def test_an_output_folder_that_cannot_exist_fails_in_one_line(tmp_path, where):
+    """Tests run as root in CI, where chmod does not stop a write: the folder is a regular
+    file's path (cannot be created) or under /proc (no files can be made there)."""
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    out = source / "o.exr" if where == "under-a-file" else "/proc/envconv-hostile/o.exr"
+    before = snapshot(source)
+    run = envconv("convert", source, out, "--to", "cube-hstrip", "--size", "4")
+    assert_failed_cleanly(run, 1, tmp_path, message="cannot write")
+    assert_untouched(before)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--size", "0"], "--size"), (["--size", "-5"], "--size"),
+    (["--samples", "0"], "--samples"), (["--samples", "1000"], "--samples"),
+    (["--compression", "lzma"], "compression"), (["--bit-depth", "uint8"], "uint8"),
+    (["--out-convention", "nope"], "convention"),
+])  # fmt: skip
+def test_bad_option_values_are_usage_errors(tmp_path, args, message):
+    """Exit 2 whether click or envconv finds the problem (envconv's own exited 1)."""
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    _convert_fails(tmp_path, source, 2, message, *args)
+
+
+def test_an_unknown_output_extension_is_a_usage_error(tmp_path):
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    before = snapshot(source)
+    run = envconv("convert", source, tmp_path / "o.xyz", "--to", "latlong", "--size", "4")
+    assert_failed_cleanly(run, 2, tmp_path, message="unknown extension .xyz")
+    assert_untouched(before)
+    assert not (tmp_path / "o.xyz").exists()
+
+
+def test_missing_to_lists_the_layouts(tmp_path):
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    run = envconv("convert", source, tmp_path / "o.exr")
+    assert_failed_cleanly(run, 2, tmp_path, message="missing option '--to'")
+    assert "latlong, cube-vcross" in run.stderr and "equal-area" in run.stderr
+
+
+@pytest.mark.parametrize("chain, typo, meant", [
+    (["resampel", "--to", "latlong"], "resampel", "resample"),
+    (["resampel", "write", "o.exr"], "resampel", "resample"),
+    (["resample", "--to", "latlong", "wirte", "o.exr"], "wirte", "write"),
+])  # fmt: skip
+def test_a_misspelt_step_is_named(tmp_path, chain, typo, meant):
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    run = envconv("read", source, *chain, cwd=tmp_path)
+    assert_failed_cleanly(run, 2, tmp_path, message=f"no such command '{typo}'; did you mean '{meant}'?")
+    run = envconv(typo, cwd=tmp_path)
+    assert_failed_cleanly(run, 2, tmp_path, message=f"did you mean '{meant}'?")
+
+
+@pytest.mark.parametrize("name, message", [
+    ("latlng", "did you mean 'latlong'?"), ("cube-vcros", "did you mean 'cube-vcross'"),
+    ("cubemap", "cube-vcross, cube-hcross, cube-hstrip, cube-vstrip, cube-exr, cube-faces"),
+    ("equirectangle", "did you mean 'latlong'?"),
+])  # fmt: skip
+def test_layout_typos_and_families_are_answered(tmp_path, name, message):
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    _convert_fails(tmp_path, source, 2, message, "--from", name)
+
+
+@pytest.mark.parametrize("alias", ["equirect", "equirectangular", "EQUIRECT"])
+def test_equirect_aliases_are_latlong(tmp_path, alias):
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    out = tmp_path / "{layout}.exr"  # the name the layout was given its registered name by
+    run = envconv("read", source, "--from", alias, "resample", "--to", alias, "--size", "8", "write", out)
+    assert (run.returncode, run.stdout, run.stderr) == (0, f"{tmp_path / 'latlong.exr'}\n", "")
+    written, spec = _read_back(tmp_path / "latlong.exr")
+    assert spec.get_string_attribute("envconv:layout") == "latlong"
+    np.testing.assert_allclose(written, _read_back(source)[0], atol=1e-6)  # same size: the same map
+
+
+@pytest.mark.parametrize("jobs", ["1", "2"])
+def test_a_truncated_file_in_a_batch_prints_nothing_of_the_libraries(tmp_path, jobs):
+    """In the workers too, OpenEXR's lines are caught: the failed file's report line carries
+    them, nothing else reaches stderr and stdout holds only the summary."""
+    folder = tmp_path / "in"
+    folder.mkdir()
+    _noise_exr(folder / "good.exr", 8)
+    data = _noise_exr(tmp_path / "whole.exr").read_bytes()
+    (folder / "cut.exr").write_bytes(data[: len(data) * 2 // 3])
+    run = envconv("-v", "batch", folder, "-j", jobs, "resample", "--to", "latlong", "--size", "4",
+                  "write", tmp_path / "out" / "{stem}.exr")  # fmt: skip
+    assert run.returncode == 1 and "Traceback" not in run.stderr
+    assert all(line.startswith("envconv:") for line in run.stderr_lines), run.stderr
+    assert "EXR_ERR" not in run.stdout and "Warning" not in run.stdout, run.stdout
+    assert len(run.stdout.splitlines()) == 1 and "1 failed" in run.stdout
+    (failed,) = [line for line in run.stderr_lines if "cut.exr" in line]
+    assert "failed" in failed and "EXR_ERR" in failed  # OpenEXR's reason, folded in
+    assert (tmp_path / "out" / "good.exr").is_file() and not (tmp_path / "out" / "cut.exr").exists()
+    assert not litter(tmp_path)
+
+
+@pytest.mark.parametrize("output", ["o.png", "o_{face}.jpg", "o.tif"])
+def test_nan_to_an_integer_format_prints_envconv_lines_only(tmp_path, output):
+    """numpy's RuntimeWarning (two lines: message and source) came out of the dither."""
+    source = tmp_path / "bad.exr"
+    pixels = np.full((16, 32, 3), 0.5, np.float32)
+    pixels[0, 0, 0], pixels[1, 1, 1] = np.nan, np.inf
+    _oiio_write(source, pixels)
+    layout = "cube-faces" if "{face}" in output else "latlong"
+    run = envconv("convert", source, tmp_path / output, "--to", layout, "--size", "8",
+                  "--bit-depth", "uint8")  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert run.stderr_lines and all(line.startswith("envconv: warning: ") for line in run.stderr_lines), run.stderr
+    assert "RuntimeWarning" not in run.stderr

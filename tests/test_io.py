@@ -299,7 +299,7 @@ def test_read_errors(tmp_path):
 
 
 def test_unknown_extension_raises(tmp_path):
-    with pytest.raises(ImageIOError, match=".xyz"):
+    with pytest.raises(envconv.UsageError, match=".xyz"):  # a bad argument: exit 2 in the CLI
         envconv.write(envconv.EnvMap(np.ones((4, 8, 3)), "latlong"), tmp_path / "m.xyz")
     assert os.listdir(tmp_path) == []
 

@@ -11,13 +11,15 @@ from __future__ import annotations
 
 import click
 
-from ..layouts import layout_names
+from ..errors import LayoutError
+from ..layouts import layout_names, resolve_layout_name
 from ..resample import FILTERS
 
 __all__ = [
     "refuse_overwrite",
     "no_clobber_option",
     "layout_choice",
+    "LayoutChoice",
     "read_options",
     "resample_options",
     "write_options",
@@ -30,8 +32,19 @@ __all__ = [
 ]
 
 
+class LayoutChoice(click.Choice):
+    """A layout name: a registered one, any case, or an alias (``equirect``); a typo is
+    answered with the close names, a family word (``cubemap``) with its layouts."""
+
+    def convert(self, value, param, ctx):
+        try:
+            return resolve_layout_name(value)
+        except LayoutError as exc:
+            self.fail(str(exc), param, ctx)
+
+
 def layout_choice() -> click.Choice:
-    return click.Choice(layout_names(), case_sensitive=False)
+    return LayoutChoice(layout_names(), case_sensitive=False)
 
 
 def _checked(check, value):

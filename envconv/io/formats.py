@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from ..errors import ImageIOError, UsageError
+from ..errors import UsageError
 
 __all__ = ["COMPRESSIONS", "check_compression", "FORMATS", "CONTAINER_FORMATS", "WRITE_FORMATS", "format_of", "choose_pixel_type"]
 
@@ -34,11 +34,12 @@ WRITE_FORMATS = {**FORMATS, **CONTAINER_FORMATS}
 
 
 def format_of(path: str):
-    """The ``WRITE_FORMATS`` entry of ``path``'s extension; ImageIOError for an unknown one."""
+    """The ``WRITE_FORMATS`` entry of ``path``'s extension; UsageError for an unknown one
+    (an output path is an argument: exit 2 on the command line)."""
     ext = Path(path).suffix.lower()
     if ext not in WRITE_FORMATS:
         known = " ".join(sorted(WRITE_FORMATS))
-        raise ImageIOError(
+        raise UsageError(
             f"cannot write {path}: unknown extension {ext or '(none)'} (known: {known})"
         )
     return WRITE_FORMATS[ext]
@@ -47,11 +48,12 @@ def format_of(path: str):
 def choose_pixel_type(path: str, pixel_type: str, bit_depth: str | None) -> str:
     """Pixel type written to ``path``: ``bit_depth``, else the source's if the format stores
     it, else the format's default for float sources (``FORMATS``), else half (from uint8) or
-    float. Raises ImageIOError when the format cannot store ``bit_depth``."""
+    float. Raises UsageError when the format cannot store ``bit_depth`` (a contradiction
+    between two arguments)."""
     fmt, allowed, default, _ = format_of(path)
     if bit_depth is not None:
         if bit_depth not in allowed:
-            raise ImageIOError(f"{fmt} cannot store {bit_depth}; it stores {', '.join(allowed)}")
+            raise UsageError(f"{fmt} cannot store {bit_depth}; it stores {', '.join(allowed)}")
         return bit_depth
     if pixel_type in allowed:
         return pixel_type

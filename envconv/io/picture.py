@@ -12,6 +12,7 @@ import os
 import numpy as np
 
 from ..errors import ImageIOError
+from .chatter import library_output
 from .files import _first_line, _oiio
 from .temps import discard, temp_for
 from .writer import write_bytes
@@ -36,10 +37,11 @@ def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
     spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], "uint8")
     spec.attribute("oiio:ColorSpace", "srgb_display")
     try:
-        ok = out.open(temp, spec) and out.write_image(data)
-        message = out.geterror()
-        ok = out.close() and ok
-        del out
+        with library_output(f"cannot write {target}", temp):  # what libpng/libjpeg print
+            ok = out.open(temp, spec) and out.write_image(data)
+            message = out.geterror()
+            ok = out.close() and ok
+            del out
         if not ok:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
         os.replace(temp, target)

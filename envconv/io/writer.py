@@ -18,6 +18,7 @@ import numpy as np
 from ..envmap import EnvMap
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
+from .chatter import library_output
 from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
 from .temps import discard as _discard
@@ -263,7 +264,12 @@ def _part_writes(target, pixels, envmap, face, bit_depth, compression, level):
 
 def _run_writes(temp, target, writes) -> None:
     """Open ``temp`` and write each (spec or list of specs, mode, data) in turn; one-line
-    errors naming ``target``."""
+    errors naming ``target``, with what the libraries printed folded in (:mod:`.chatter`)."""
+    with library_output(f"cannot write {target}", temp):
+        _write_all(temp, target, writes)
+
+
+def _write_all(temp, target, writes) -> None:
     oiio = _oiio()
     out = oiio.ImageOutput.create(temp)
     if out is None:
