@@ -181,3 +181,15 @@ def test_system_memory_is_used_at_80_percent(monkeypatch):
     with pytest.raises(memory.MemoryLimitError, match="needs about 6 GB of memory and 4 GB"):
         memory.check(6 << 30, "this conversion")
     memory.check(3 << 30, "this conversion")  # fits: no error
+
+
+@linux
+def test_half_source_to_a_small_map_is_within_the_bound(sources):
+    """A half-float EXR shrunk to a small cube: reading must not hold a half copy of the whole
+    image beside the float32 one (it peaked at 1.5 × the arrays, all of it the read)."""
+    folder, tiny, mid = sources
+    half = folder / "half.exr"
+    write_plain(half, _smooth_latlong(2048), pixel_type="half")
+    warm, peak = _measure(folder, tiny, half, "small.exr", {"to": "cube-vcross", "size": 64})
+    read, written = _array_bytes(half, folder / "small.exr")
+    assert peak - warm <= 1.25 * (read + written), (peak - warm, read, written)

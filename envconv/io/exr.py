@@ -75,6 +75,8 @@ def read_exr_pixels(path: str, spec):
     names = list(spec.channelnames)
     grouped = names in (["R", "G", "B"], ["R", "G", "B", "A"])
     _set_openexr_threads(spec.get_string_attribute("compression", "zip"))
+    if any(str(f) == "half" for f in (spec.channelformats or [spec.format])):
+        return _read_half_bands(path, spec, names)
     try:
         with OpenEXR.File(path, separate_channels=not grouped) as exr:
             channels = exr.channels()
@@ -90,5 +92,42 @@ def read_exr_pixels(path: str, spec):
     except Exception:  # damaged, or subsampled channels: OIIO reads it or says why not
         return None
     if pixels is None or pixels.shape != (spec.height, spec.width, len(names)):
+        return None
+    return pixels
+
+
+
+#: Scanlines decoded per call for half data: a multiple of every compression's block (1, 16,
+#: 32 or 256 lines), small enough that the half copy of a band is noise beside the image.
+HALF_BAND_ROWS = 256
+
+
+def _read_half_bands(path: str, spec, names: list[str]):
+    """Half channels decoded band by band into one float32 array, so reading never holds a
+    half copy of the whole image beside it (peak 1.0x the float32 pixels, not 1.5x:
+    docs/memory.md). OpenEXR's ``InputFile.channels`` decodes a range of scanlines of several
+    channels at once, as fast as ``OpenEXR.File`` decodes the whole image (4096x2048 half zip:
+    0.15 s either way, on 2 cores). None when it declines or fails, as for
+    :func:`read_exr_pixels`."""
+    import OpenEXR
+
+    try:
+        exr = OpenEXR.InputFile(path)
+        try:
+            header = exr.header()["channels"]
+            if any(name not in header for name in names):
+                return None
+            pixels = np.empty((spec.height, spec.width, len(names)), np.float32)
+            for y0 in range(0, spec.height, HALF_BAND_ROWS):
+                y1 = min(spec.height, y0 + HALF_BAND_ROWS)
+                planes = exr.channels(names, header[names[0]].type, spec.y + y0, spec.y + y1 - 1)
+                for k, (name, plane) in enumerate(zip(names, planes, strict=True)):
+                    kind = np.float16 if str(header[name].type) == "HALF" else np.float32
+                    if header[name].type != header[names[0]].type:
+                        plane = exr.channel(name, header[name].type, spec.y + y0, spec.y + y1 - 1)
+                    pixels[y0:y1, :, k] = np.frombuffer(plane, kind).reshape(y1 - y0, spec.width)
+        finally:
+            exr.close()
+    except Exception:  # damaged, or subsampled channels: OIIO reads it or says why not
         return None
     return pixels
