@@ -295,7 +295,7 @@ def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
     faces = _c(faces, np.float32)
     p, nch = faces.shape[1], faces.shape[3]
     count = sum(6 * (p >> k) ** 2 for k in range(p.bit_length()))
-    pyramid = np.empty(count * (8 + 4 * nch), np.float32)
+    pyramid = np.empty(count * (_core.IBL_NODE_FIELDS + 4 * nch), np.float32)
     _core.ibl_pyramid(faces, pyramid, _threads)
     return pyramid
 

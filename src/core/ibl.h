@@ -33,17 +33,21 @@ namespace envconv {
 // A pyramid of the six faces of a cube (GL face table), level 0 of p x p texels per face, each
 // level halving down to 1 x 1. Node (level s, face f, row j, column i) starts at
 // data + offset(s) + ((f * (p >> s) + j) * (p >> s) + i) * stride, with fields
-// [omega, W, mgx, mgy, mgz, mlx, mly, mlz, S_0 .. S_{C-1}, P_0 .. P_{C-1}]: solid angle,
-// luminance weight Int max(lum, 0) dl, geometric and luminance-weighted mean directions,
-// Int L_c dl, and Int L_c l dl (three floats each): the expansion about the luminance-weighted
-// mean carries each channel's own first moment, so channels that differ are exact to first
-// order too.
+// [omega, W, ugx, ugy, ugz, |g|, ulx, uly, ulz, |l|, 1 - cos r, sin r, S_0 .. S_{C-1},
+//  P_0 .. P_{C-1}]: solid angle, luminance weight Int max(lum, 0) dl, the geometric and the
+// luminance-weighted mean directions each as a unit vector and a length (1 - |m|^2 is the
+// spread of directions in the node), the node's angular radius r about the unit geometric mean
+// (the largest angle to its four corners: its edges are great-circle arcs), Int L_c dl, and
+// Int L_c l dl (three floats each): the expansion about the luminance-weighted mean carries
+// each channel's own first moment, so channels that differ are exact to first order too.
 struct Pyramid {
+    static constexpr int64_t kFields = 12;
     const float* data;
     int64_t p;
     int levels;
     int64_t channels;
-    int64_t stride() const { return 8 + 4 * channels; }
+    static int64_t stride_for(int64_t channels) { return kFields + 4 * channels; }
+    int64_t stride() const { return stride_for(channels); }
     int64_t offset(int s) const {
         int64_t off = 0;
         for (int k = 0; k < s; ++k) off += 6 * (p >> k) * (p >> k);
@@ -57,7 +61,7 @@ struct Pyramid {
 };
 
 // Build the pyramid of `faces` (6, p, p, C) float32, p a power of two, into `out`
-// (Pyramid::node_count(p) * (8 + 4 C) floats).
+// (Pyramid::node_count(p) * Pyramid::stride_for(C) floats).
 void build_pyramid(const float* faces, int64_t p, int64_t channels, float* out, int threads);
 
 // One prefiltered level: every pixel of `out` (H, W, C) is the solid-angle mean over its
