@@ -48,7 +48,8 @@ struct NodeRef {
 
 constexpr int kLeafSamples = 3;
 // A node across n's horizon (where K has a kink) is expanded anyway, by expand_across(), when
-// omega K there is below this fraction of Int K; otherwise it is opened. Narrow lobes are ~0 at
+// its weight (see classify) times K there is below this fraction of Int K; otherwise it is
+// opened. Narrow lobes are ~0 at
 // the horizon; broad lobes (the cosine) meet it along the whole horizon, where expand_across()
 // errs by a few per cent of omega K' sigma (sigma the node's spread of t) instead of the whole
 // omega K of the plain expansion: 1e-3 leaves the irradiance of a sun on the horizon within
@@ -63,14 +64,15 @@ enum Verdict { kCull, kExpand, kExpandAcross, kOpen, kDefer, kLeaf };
 struct Walk {
     const Pyramid& pyr;
     const Lobe& lobe;
-    double tau, kink_tol;
+    double tau, kink_tol, inv_mean_lum = 0.0;
     int64_t nch, stride;
     const float* base[64];
     // The tile's samples, row-major in a grid of gw x gh: direction, weight, sums.
     int gw = 0, gh = 0;
     std::vector<double> nx, ny, nz, weight, den, num;  // num: channel-major, gw * gh each
     // Gathered samples of the current sub-tile, and per-sample scratch.
-    std::vector<double> sx, sy, sz, sden, snum, tk, tk1, ttl;
+    std::vector<double> sx, sy, sz, sden, snum, ttl;
+    std::vector<float> fx, fy, fz, fden, fk, fk1;
     std::vector<int> index;
     std::vector<std::vector<NodeRef>> lists;
     std::vector<NodeRef> stack;
@@ -104,42 +106,72 @@ Verdict Walk::classify(const NodeRef& nd, const float* f, const Vec3& c, double 
     double sin_max = cos_lo >= 0.0 ? sin_lo : (cos_hi <= 0.0 ? sin_hi : 1.0);
     double dt = sin_max * double(f[11]) + double(f[10]);
     if (tu_max + dt <= 0.0) return kCull;  // below every sample's horizon
-    // Across the horizon K has a kink; the expansion may skip it where K is negligible
-    // there (narrow lobes: K(dt) omega below kink_tol of the lobe's integral).
-    bool across = tu_min - dt <= 0.0 && f[0] * lobe.value(std::min(1.0, 2.0 * dt)) > kink_tol;
-    bool near = across || dt * std::fabs(lobe.b) > tau * lobe.q(std::min(1.0, tu_max + dt));
+    // Across the horizon K has a kink; the expansion may skip it where K is negligible there:
+    // K(2 dt) times the node's weight below kink_tol of the lobe's integral. The weight is the
+    // larger of omega and the solid angle that the node's luminance would fill at the map's mean
+    // radiance, so that a sun on the horizon is opened though its solid angle is small.
+    double weight = std::max(double(f[0]), double(f[1]) * inv_mean_lum);
+    bool across = tu_min - dt <= 0.0 && weight * lobe.value(std::min(1.0, 2.0 * dt)) > kink_tol;
+    double step = dt * std::fabs(lobe.b), room = tau * lobe.q(std::min(1.0, tu_max + dt));
+    // A node brighter than the map's mean (weight > omega) is held to a tighter step, by the
+    // square root of the ratio: a sun stays exact where the expansion of sky is already good.
+    bool near = across || step > room ||
+                (weight > f[0] && step * step * weight > room * room * f[0]);
     if (!near) return tu_min - dt <= 0.0 ? kExpandAcross : kExpand;
     if (sR > 0.0) return (nd.level == 0 || double(f[11]) <= sR) ? kDefer : kOpen;
     return nd.level == 0 ? kLeaf : kOpen;
 }
 
+// Per sample: K's expansion about the geometric mean (fden, times omega) and about the
+// luminance-weighted one (fk) with its slope (fk1), in float, four samples to a vector: t enters
+// as 1 - t = |n - u|^2 / 2, so that q(t) = a^2 + (1 - a^2)(1 - t) / 2 keeps its relative
+// precision at the peak, where q ~ a^2.
+void lobe_terms(const Lobe& lobe, const float* f, int m, const float* __restrict fx,
+                const float* __restrict fy, const float* __restrict fz, float* __restrict fden,
+                float* __restrict fk, float* __restrict fk1) {
+    const float c0 = float(lobe.c0), b = float(lobe.b), a2 = float(1.0 + 2.0 * lobe.b);
+    const float hb = float(-lobe.b), omega = f[0];
+    const double gn = f[5], ln = f[9];
+    const float ugx = f[2], ugy = f[3], ugz = f[4], fgn = f[5];
+    const float og = float(1.0 - gn), vg = float(0.5 * (1.0 - gn) * (1.0 + gn));
+    const float ulx = f[6], uly = f[7], ulz = f[8], fln = f[9];
+    const float ol = float(1.0 - ln), vl = float(0.5 * (1.0 - ln) * (1.0 + ln));
+    for (int s = 0; s < m; ++s) {
+        float dx = fx[s] - ugx, dy = fy[s] - ugy, dz = fz[s] - ugz;
+        float wu = 0.5f * (dx * dx + dy * dy + dz * dz);  // 1 - n.u
+        float wg = og + fgn * wu, tg = 1.0f - wg;           // 1 - t and t
+        float qg = a2 + hb * wg, ig = 1.0f / qg, ig2 = ig * ig;
+        float kg = c0 * tg * ig2 +
+                   c0 * b * (3.0f * b * tg - 2.0f * qg) * ig2 * ig2 * vg * (wu * (2.0f - wu));
+        fden[s] = tg > 0.0f ? omega * kg : 0.0f;
+        float ex = fx[s] - ulx, ey = fy[s] - uly, ez = fz[s] - ulz;
+        float wv = 0.5f * (ex * ex + ey * ey + ez * ez);
+        float wl = ol + fln * wv, tl = 1.0f - wl;
+        float ql = a2 + hb * wl, il = 1.0f / ql, il2 = il * il;
+        float kl = c0 * tl * il2 +
+                   c0 * b * (3.0f * b * tl - 2.0f * ql) * il2 * il2 * vl * (wv * (2.0f - wv));
+        float k1 = c0 * (ql - 2.0f * b * tl) * il2 * il;
+        fk[s] = tl > 0.0f ? kl : 0.0f;
+        fk1[s] = tl > 0.0f ? k1 : 0.0f;
+    }
+}
+
 // Add node f's expansion to the m gathered samples: Int_node L K(n.l) dl ~
 // S [K(t) + K''(t) Var(t) / 2] + K'(t) (n.P - t S) about the luminance-weighted mean (each
-// channel's first moment P), Int_node K with the geometric mean into den.
+// channel's first moment P), Int_node K with the geometric mean into den. The sums, and the
+// first moments (a difference of near-equal terms), are in double.
 void Walk::expand(const float* f, int m) {
-    const double c0 = lobe.c0, b = lobe.b, omega = f[0];
-    const double ugx = f[2], ugy = f[3], ugz = f[4], gn = f[5], vg = 0.5 * (1.0 - gn * gn);
-    const double ulx = f[6], uly = f[7], ulz = f[8], ln = f[9], vl = 0.5 * (1.0 - ln * ln);
-    for (int s = 0; s < m; ++s) {
-        double tu = sx[s] * ugx + sy[s] * ugy + sz[s] * ugz;
-        double tg = tu * gn, qg = 1.0 + b * (1.0 + tg), ig = 1.0 / qg, ig2 = ig * ig;
-        double kg = c0 * tg * ig2 + c0 * b * (3.0 * b * tg - 2.0 * qg) * ig2 * ig2 * vg * (1.0 - tu * tu);
-        sden[s] += tg > 0.0 ? omega * kg : 0.0;
-        double tlu = sx[s] * ulx + sy[s] * uly + sz[s] * ulz;
-        double tl = tlu * ln, ql = 1.0 + b * (1.0 + tl), il = 1.0 / ql, il2 = il * il;
-        double kl = c0 * tl * il2 + c0 * b * (3.0 * b * tl - 2.0 * ql) * il2 * il2 * vl * (1.0 - tlu * tlu);
-        double k1 = c0 * (ql - 2.0 * b * tl) * il2 * il;
-        tk[s] = tl > 0.0 ? kl : 0.0;
-        tk1[s] = tl > 0.0 ? k1 : 0.0;
-        ttl[s] = tl;
-    }
+    lobe_terms(lobe, f, m, fx.data(), fy.data(), fz.data(), fden.data(), fk.data(), fk1.data());
+    for (int s = 0; s < m; ++s) sden[s] += fden[s];
+    const double dlx = f[6] * double(f[9]), dly = f[7] * double(f[9]), dlz = f[8] * double(f[9]);
+    for (int s = 0; s < m; ++s) ttl[s] = sx[s] * dlx + sy[s] * dly + sz[s] * dlz;
     for (int64_t ch = 0; ch < nch; ++ch) {
         const double sc = f[Pyramid::kFields + ch];
         const float* pc = f + Pyramid::kFields + nch + 3 * ch;
         const double px = pc[0], py = pc[1], pz = pc[2];
         double* acc = snum.data() + ch * m;
         for (int s = 0; s < m; ++s)
-            acc[s] += sc * tk[s] + tk1[s] * (sx[s] * px + sy[s] * py + sz[s] * pz - ttl[s] * sc);
+            acc[s] += sc * fk[s] + fk1[s] * (sx[s] * px + sy[s] * py + sz[s] * pz - ttl[s] * sc);
     }
 }
 
@@ -230,6 +262,9 @@ void Walk::tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeR
         sx[s] = nx[index[s]];
         sy[s] = ny[index[s]];
         sz[s] = nz[index[s]];
+        fx[s] = float(sx[s]);
+        fy[s] = float(sy[s]);
+        fz[s] = float(sz[s]);
         sden[s] = 0.0;
         cR = std::min(cR, sx[s] * c.x + sy[s] * c.y + sz[s] * c.z);
     }
@@ -298,18 +333,30 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
                             (2.0 * scale_y / double(dst.n)) / double(samples * samples);
     const int64_t span = std::max(1, kTileSamples / samples);  // pixels per tile side
     const int64_t tiles_x = (width + span - 1) / span, tiles_y = (height + span - 1) / span;
+    // Mean luminance of the map (from the six root nodes): a node's luminance weight over it
+    // is the solid angle the node would have at that mean radiance.
+    double lum = 0.0, area = 0.0;
+    const float* top = pyr.data + pyr.offset(pyr.levels - 1);
+    for (int f = 0; f < 6; ++f) {
+        area += top[f * pyr.stride()];
+        lum += top[f * pyr.stride() + 1];
+    }
+    const double inv_mean_lum = lum > 0.0 ? area / lum : 0.0;
     std::vector<NodeRef> roots;
     for (int32_t f = 0; f < 6; ++f) roots.push_back({pyr.levels - 1, f, 0, 0});
     parallel_for(tiles_x * tiles_y, threads, [&](int64_t task) {
         const int64_t i0 = (task % tiles_x) * span, j0 = (task / tiles_x) * span;
         const int64_t pw = std::min(span, width - i0), ph = std::min(span, height - j0);
         Walk walk(pyr, lobe, tau, kink_tol);
+        walk.inv_mean_lum = inv_mean_lum;
         const int gw = int(pw * samples), gh = int(ph * samples), cells = gw * gh;
         walk.gw = gw;
         walk.gh = gh;
         for (auto* v : {&walk.nx, &walk.ny, &walk.nz, &walk.weight, &walk.den, &walk.sx, &walk.sy,
-                        &walk.sz, &walk.sden, &walk.tk, &walk.tk1, &walk.ttl})
+                        &walk.sz, &walk.sden, &walk.ttl})
             v->assign(cells, 0.0);
+        for (auto* v : {&walk.fx, &walk.fy, &walk.fz, &walk.fden, &walk.fk, &walk.fk1})
+            v->assign(cells, 0.0f);
         walk.num.assign(nch * cells, 0.0);
         walk.snum.assign(nch * cells, 0.0);
         for (int y = 0; y < gh; ++y) {
