@@ -56,7 +56,7 @@ constexpr int kLeafSamples = 3;
 // 0.1% of the brute-force integral (1e-6 without it gave 0.07%).
 constexpr double kKinkToleranceNarrow = 1e-4, kKinkToleranceBroad = 1e-3;
 // Output samples per tile side (a tile is about this many samples square).
-constexpr int kTileSamples = 16;
+constexpr int kTileSamples = 8;
 
 enum Verdict { kCull, kExpand, kExpandAcross, kOpen, kDefer, kLeaf };
 
