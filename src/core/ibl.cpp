@@ -80,7 +80,8 @@ void build_level0(const float* faces, int64_t p, int64_t nch, float* out, int th
             for (int64_t c = 0; c < nch; ++c) {
                 double sc = omega * double(px[c]);
                 node[f0 + c] = float(sc);
-                for (int k = 0; k < 3; ++k) node[f0 + nch + 3 * c + k] = float(sc * m[k]);
+                // A texel is uniform: its first moment about its own mean direction is 0.
+                for (int k = 0; k < 3; ++k) node[f0 + nch + 3 * c + k] = 0.0f;
             }
         }
     });
@@ -103,7 +104,15 @@ void build_parent(const float* child, int64_t q, int64_t nch, float* out, int th
                         g[k] += double(c[0]) * c[2 + k] * c[5];
                         l[k] += double(c[1]) * c[6 + k] * c[9];
                     }
-                    for (int64_t ch = 0; ch < 4 * nch; ++ch) sum[ch] += c[f0 + ch];
+                    // Each child's first moment about the origin: its own about its mean
+                    // direction (as stored) plus S times that direction.
+                    for (int64_t ch = 0; ch < nch; ++ch) {
+                        double sc = c[f0 + ch];
+                        sum[ch] += sc;
+                        for (int k = 0; k < 3; ++k)
+                            sum[nch + 3 * ch + k] += double(c[f0 + nch + 3 * ch + k]) +
+                                                     sc * double(c[6 + k]) * double(c[9]);
+                    }
                 }
             }
             float* node = out + ((face * q + j) * q + i) * stride;
@@ -116,7 +125,16 @@ void build_parent(const float* child, int64_t q, int64_t nch, float* out, int th
             put_direction(node, 2, g);
             put_direction(node, 6, l);
             put_radius(node, g, int(face), q, j, i);
-            for (int64_t ch = 0; ch < 4 * nch; ++ch) node[f0 + ch] = float(sum[ch]);
+            // The first moments about the node's luminance-weighted mean direction as stored
+            // (the expansion's centre): small where the node is nearly uniform, and exactly
+            // what the expansion needs, without the cancellation of n.P - t S at evaluation.
+            for (int64_t ch = 0; ch < nch; ++ch) {
+                node[f0 + ch] = float(sum[ch]);
+                double sc = node[f0 + ch];
+                for (int k = 0; k < 3; ++k)
+                    node[f0 + nch + 3 * ch + k] = float(
+                        sum[nch + 3 * ch + k] - sc * double(node[6 + k]) * double(node[9]));
+            }
         }
     });
 }

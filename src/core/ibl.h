@@ -38,8 +38,9 @@ namespace envconv {
 // luminance-weighted mean directions each as a unit vector and a length (1 - |m|^2 is the
 // spread of directions in the node), the node's angular radius r about the unit geometric mean
 // (the largest angle to its four corners: its edges are great-circle arcs), Int L_c dl, and
-// Int L_c l dl (three floats each): the expansion about the luminance-weighted mean carries
-// each channel's own first moment, so channels that differ are exact to first order too.
+// Int L_c (l - m_l) dl (three floats each), m_l = ul |l| as stored: the expansion about the
+// luminance-weighted mean carries each channel's own first moment about it, so channels that
+// differ are exact to first order too (and a uniform node's is 0, not a difference of floats).
 struct Pyramid {
     static constexpr int64_t kFields = 12;
     const float* data;

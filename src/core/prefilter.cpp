@@ -71,7 +71,7 @@ struct Walk {
     int gw = 0, gh = 0;
     std::vector<double> nx, ny, nz, weight, den, num;  // num: channel-major, gw * gh each
     // Gathered samples of the current sub-tile, and per-sample scratch.
-    std::vector<double> sx, sy, sz, sden, snum, ttl;
+    std::vector<double> sx, sy, sz, sden, snum;
     std::vector<float> fx, fy, fz, fden, fk, fk1;
     std::vector<int> index;
     std::vector<std::vector<NodeRef>> lists;
@@ -129,49 +129,47 @@ Verdict Walk::classify(const NodeRef& nd, const float* f, const Vec3& c, double 
 void lobe_terms(const Lobe& lobe, const float* f, int m, const float* __restrict fx,
                 const float* __restrict fy, const float* __restrict fz, float* __restrict fden,
                 float* __restrict fk, float* __restrict fk1) {
-    const float c0 = float(lobe.c0), b = float(lobe.b), a2 = float(1.0 + 2.0 * lobe.b);
-    const float hb = float(-lobe.b), omega = f[0];
+    using real = float;  // four to an SSE vector
+    const real c0 = real(lobe.c0), b = real(lobe.b), a2 = real(1.0 + 2.0 * lobe.b);
+    const real hb = real(-lobe.b), omega = f[0];
     const double gn = f[5], ln = f[9];
-    const float ugx = f[2], ugy = f[3], ugz = f[4], fgn = f[5];
-    const float og = float(1.0 - gn), vg = float(0.5 * (1.0 - gn) * (1.0 + gn));
-    const float ulx = f[6], uly = f[7], ulz = f[8], fln = f[9];
-    const float ol = float(1.0 - ln), vl = float(0.5 * (1.0 - ln) * (1.0 + ln));
+    const real ugx = f[2], ugy = f[3], ugz = f[4], fgn = f[5];
+    const real og = real(1.0 - gn), vg = real(0.5 * (1.0 - gn) * (1.0 + gn));
+    const real ulx = f[6], uly = f[7], ulz = f[8], fln = f[9];
+    const real ol = real(1.0 - ln), vl = real(0.5 * (1.0 - ln) * (1.0 + ln));
     for (int s = 0; s < m; ++s) {
-        float dx = fx[s] - ugx, dy = fy[s] - ugy, dz = fz[s] - ugz;
-        float wu = 0.5f * (dx * dx + dy * dy + dz * dz);  // 1 - n.u
-        float wg = og + fgn * wu, tg = 1.0f - wg;           // 1 - t and t
-        float qg = a2 + hb * wg, ig = 1.0f / qg, ig2 = ig * ig;
-        float kg = c0 * tg * ig2 +
+        real dx = fx[s] - ugx, dy = fy[s] - ugy, dz = fz[s] - ugz;
+        real wu = 0.5f * (dx * dx + dy * dy + dz * dz);  // 1 - n.u
+        real wg = og + fgn * wu, tg = 1.0f - wg;           // 1 - t and t
+        real qg = a2 + hb * wg, ig = 1.0f / qg, ig2 = ig * ig;
+        real kg = c0 * tg * ig2 +
                    c0 * b * (3.0f * b * tg - 2.0f * qg) * ig2 * ig2 * vg * (wu * (2.0f - wu));
         fden[s] = tg > 0.0f ? omega * kg : 0.0f;
-        float ex = fx[s] - ulx, ey = fy[s] - uly, ez = fz[s] - ulz;
-        float wv = 0.5f * (ex * ex + ey * ey + ez * ez);
-        float wl = ol + fln * wv, tl = 1.0f - wl;
-        float ql = a2 + hb * wl, il = 1.0f / ql, il2 = il * il;
-        float kl = c0 * tl * il2 +
+        real ex = fx[s] - ulx, ey = fy[s] - uly, ez = fz[s] - ulz;
+        real wv = 0.5f * (ex * ex + ey * ey + ez * ez);
+        real wl = ol + fln * wv, tl = 1.0f - wl;
+        real ql = a2 + hb * wl, il = 1.0f / ql, il2 = il * il;
+        real kl = c0 * tl * il2 +
                    c0 * b * (3.0f * b * tl - 2.0f * ql) * il2 * il2 * vl * (wv * (2.0f - wv));
-        float k1 = c0 * (ql - 2.0f * b * tl) * il2 * il;
+        real k1 = c0 * (ql - 2.0f * b * tl) * il2 * il;
         fk[s] = tl > 0.0f ? kl : 0.0f;
         fk1[s] = tl > 0.0f ? k1 : 0.0f;
     }
 }
 
 // Add node f's expansion to the m gathered samples: Int_node L K(n.l) dl ~
-// S [K(t) + K''(t) Var(t) / 2] + K'(t) (n.P - t S) about the luminance-weighted mean (each
-// channel's first moment P), Int_node K with the geometric mean into den. The sums, and the
-// first moments (a difference of near-equal terms), are in double.
+// S [K(t) + K''(t) Var(t) / 2] + K'(t) n.P about the luminance-weighted mean (P each channel's
+// first moment about it), Int_node K with the geometric mean into den. The sums are in double.
 void Walk::expand(const float* f, int m) {
     lobe_terms(lobe, f, m, fx.data(), fy.data(), fz.data(), fden.data(), fk.data(), fk1.data());
     for (int s = 0; s < m; ++s) sden[s] += fden[s];
-    const double dlx = f[6] * double(f[9]), dly = f[7] * double(f[9]), dlz = f[8] * double(f[9]);
-    for (int s = 0; s < m; ++s) ttl[s] = sx[s] * dlx + sy[s] * dly + sz[s] * dlz;
     for (int64_t ch = 0; ch < nch; ++ch) {
         const double sc = f[Pyramid::kFields + ch];
         const float* pc = f + Pyramid::kFields + nch + 3 * ch;
         const double px = pc[0], py = pc[1], pz = pc[2];
         double* acc = snum.data() + ch * m;
         for (int s = 0; s < m; ++s)
-            acc[s] += sc * fk[s] + fk1[s] * (sx[s] * px + sy[s] * py + sz[s] * pz - ttl[s] * sc);
+            acc[s] += sc * fk[s] + fk1[s] * (sx[s] * px + sy[s] * py + sz[s] * pz);
     }
 }
 
@@ -215,7 +213,7 @@ void Walk::expand_across(const float* f, int m) {
         for (int64_t ch = 0; ch < nch; ++ch) {
             const double sc = f[Pyramid::kFields + ch];
             const float* pc = f + Pyramid::kFields + nch + 3 * ch;
-            snum[ch * m + s] += sc * k + k1 * (sx[s] * pc[0] + sy[s] * pc[1] + sz[s] * pc[2] - tl * sc);
+            snum[ch * m + s] += sc * k + k1 * (sx[s] * pc[0] + sy[s] * pc[1] + sz[s] * pc[2]);
         }
     }
 }
@@ -353,7 +351,7 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
         walk.gw = gw;
         walk.gh = gh;
         for (auto* v : {&walk.nx, &walk.ny, &walk.nz, &walk.weight, &walk.den, &walk.sx, &walk.sy,
-                        &walk.sz, &walk.sden, &walk.ttl})
+                        &walk.sz, &walk.sden})
             v->assign(cells, 0.0);
         for (auto* v : {&walk.fx, &walk.fy, &walk.fz, &walk.fden, &walk.fk, &walk.fk1})
             v->assign(cells, 0.0f);
