@@ -82,8 +82,6 @@ _MIN_PYRAMID = 32
 #: The cosine lobe is broad: a 64 cube resolves it, and each node's luminance-weighted mean
 #: direction still places a small sun exactly.
 _IRRADIANCE_PYRAMID = 64
-#: The coarsest pyramid a level of the chain is summed from (see _coarser).
-_COARSEST_PYRAMID = 64
 
 
 def roughness_levels(mapping, count: int) -> list[float]:
@@ -160,20 +158,6 @@ def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alp
     return kernels.ibl_pyramid(faces), p, nch, rotation
 
 
-def _coarser(pyr, n_level: float, alpha: float):
-    """The pyramid ``pyr`` from its level 2^s on: the finest level a lobe of ``alpha`` needs for
-    an output of ``n_level`` pixels per cube face, at least 2^s ≥ max(n_level, 4/α), as the
-    chain's pyramid is for its narrowest lobe (and never below _COARSEST_PYRAMID). Nodes are
-    summed from the finest level up, so a coarser level's nodes are the same sums."""
-    data, p, nch, rotation = pyr
-    want = min(p, max(_COARSEST_PYRAMID, _pow2(max(n_level, 4.0 / alpha))))
-    if want >= p:
-        return pyr
-    stride = kernels.ibl_node_floats(nch)
-    skip = sum(6 * (p >> k) ** 2 for k in range((p // want).bit_length() - 1))
-    return data[skip * stride :], want, nch, rotation
-
-
 def _prefilter(pyr, to: Layout, size: int, guard: int, fill: bool, shape, scale, alpha, rotation):
     p, nch = pyr[1], pyr[2]
     height, width = shape
@@ -205,10 +189,7 @@ def ggx_levels(source: EnvMap, to, size: int, guard: int, fill: bool, rot, chain
         if alphas[k] <= 0.0:
             out.append((pixels, coverage))
             continue
-        n_level = size * horizon_pitch("cube-faces") / horizon_pitch(to) / max(scale)
-        level_pyr = _coarser(pyr, n_level, alphas[k])
-        level = _prefilter(level_pyr, to, size, guard, fill, pixels.shape[:2], scale, alphas[k],
-                           pyr[3])  # fmt: skip
+        level = _prefilter(pyr, to, size, guard, fill, pixels.shape[:2], scale, alphas[k], pyr[3])
         out.append((level, coverage))
     return out, rough
 
