@@ -17,6 +17,8 @@ Run by hand and quote the figures; nothing here is a test.
     python benchmarks/bench.py ibl --baseline PYTHON
                                             # the same, interleaved with another venv's envconv
     python benchmarks/bench.py preview      # contact sheet and viewer page of a 16K lat-long, in process
+    python benchmarks/bench.py memory       # peak RSS over (input + output arrays), per case,
+                                            # beside envconv.memory's estimate (docs/memory.md)
 
 The envconv measured is the one the running interpreter imports (run this with a venv's python
 in which envconv is installed); the first line printed names it. Kernel throughput counts output
@@ -300,6 +302,87 @@ def bench_preview(repeats: int = 3) -> None:
               f"best {min(times):.2f} s over {repeats} runs")  # fmt: skip
 
 
+def peak_rss(argv: list[str]) -> int:
+    """Peak RSS in bytes of the process ``argv`` (its own, from ``os.wait4``); raises on failure."""
+    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+    _, status, usage = os.wait4(proc.pid, 0)
+    proc.returncode = os.waitstatus_to_exitcode(status)
+    error = proc.stderr.read().decode()
+    proc.stderr.close()
+    if proc.returncode:
+        raise SystemExit(f"failed ({proc.returncode}): {' '.join(argv)}\n{error}")
+    return usage.ru_maxrss * 1024  # Linux reports kB
+
+
+def memory_cases(tmp: str) -> list[tuple[str, str, list[str]]]:
+    """(label, input, convert arguments) of the memory row; inputs are written into ``tmp``
+    by child processes (a child forked from a big parent would report the parent's RSS)."""
+    exe = os.path.join(os.path.dirname(sys.executable), "envconv")
+    inputs = {}
+    for height in (1024, 2048):
+        inputs[height] = os.path.join(tmp, f"latlong-{2 * height}.exr")
+        subprocess.run([exe, "convert", EXAMPLE, inputs[height], "--to", "latlong", "--size",
+                        str(height), "--samples", "1", "--bit-depth", "float"], check=True)  # fmt: skip
+    small, big = inputs[1024], inputs[2048]
+    return [
+        ("latlong 2048x1024 -> cube-vcross 512, EXR", small, ["--to", "cube-vcross", "--size", "512"]),
+        ("latlong 4096x2048 -> cube-vcross 1024, EXR", big, ["--to", "cube-vcross", "--size", "1024"]),
+        ("latlong 4096x2048 -> latlong 4096x2048, EXR", big, ["--to", "latlong", "--size", "2048"]),
+        ("latlong 4096x2048 -> cube-vcross 64 (rip-map), EXR", big, ["--to", "cube-vcross", "--size", "64"]),
+        ("latlong 4096x2048 -> cube-vcross 1024 --mips, EXR", big, ["--to", "cube-vcross", "--size", "1024", "--mips"]),
+        ("latlong 4096x2048 -> cube-vcross 1024 --alpha, EXR", big, ["--to", "cube-vcross", "--size", "1024", "--alpha"]),
+        ("latlong 4096x2048 -> cube-vcross 1024, PNG", big, ["--to", "cube-vcross", "--size", "1024", ".png"]),
+        ("latlong 4096x2048 -> latlong 4096x2048, PNG", big, ["--to", "latlong", "--size", "2048", ".png"]),
+    ]  # fmt: skip
+
+
+def array_bytes(source: str, out: str) -> tuple[int, int]:
+    """(input, output) array bytes of a conversion: the float32 source as read and every
+    float32 level of the output as written, channels included (what issue 15's bound counts)."""
+    src = envconv.io.read_header(source)
+    read = src[0] * src[1] * len(src[2]) * 4
+    written = 0
+    for path in [out]:
+        for width, height in envconv.io.mip_levels(path):
+            written += width * height * len(envconv.io.read_header(path)[2]) * 4
+    return read, written
+
+
+def bench_memory() -> None:
+    """Peak RSS of ``envconv convert`` per case, less the baseline: the peak of the same command
+    on a 32×16 source at size 4 (interpreter, numpy, OIIO, OpenEXR, OCIO and the core loaded, a
+    conversion run; about 100 MB), over the input and output array bytes."""
+    exe = os.path.join(os.path.dirname(sys.executable), "envconv")
+    with tempfile.TemporaryDirectory() as tmp:
+        tiny = os.path.join(tmp, "tiny.exr")
+        subprocess.run([exe, "convert", EXAMPLE, tiny, "--to", "latlong", "--size", "16",
+                        "--bit-depth", "float"], check=True)  # fmt: skip
+        for label, source, args in memory_cases(tmp):
+            ext = args.pop() if args[-1].startswith(".") else ".exr"
+            out = os.path.join(tmp, f"out{ext}")
+            base = peak_rss([exe, "convert", tiny, os.path.join(tmp, f"tiny-out{ext}"), *args[:2],
+                             "--size", "4", *args[4:]])  # fmt: skip
+            peak = peak_rss([exe, "convert", source, out, *args])
+            read, written = array_bytes(source, out)
+            ratio = (peak - base) / (read + written)
+            guess = _estimate(source, args)
+            print(f"memory {label}: peak {peak / 2**20:.0f} MB - baseline {base / 2**20:.0f} MB "
+                  f"= {(peak - base) / 2**20:.0f} MB over in {read / 2**20:.0f} MB + out "
+                  f"{written / 2**20:.0f} MB: {ratio:.2f}; estimate {guess / 2**20:.0f} MB "
+                  f"({guess / (peak - base):.2f}x)")  # fmt: skip
+
+
+def _estimate(source: str, args: list[str]) -> int:
+    """envconv.memory's estimate for ``convert SOURCE --to L --size N [--mips|--alpha]``,
+    worked out in a child process (reading the source here would swell later children)."""
+    options = {"mips": "--mips" in args, "alpha": "--alpha" in args}
+    code = ("import sys, envconv; print(envconv.resample.memory_needed(envconv.read(sys.argv[1]),"
+            f" {args[1]!r}, size={int(args[3])}, **{options!r}))")  # fmt: skip
+    done = subprocess.run([sys.executable, "-c", code, source], capture_output=True, text=True,
+                          check=True)  # fmt: skip
+    return int(done.stdout.split()[-1])
+
+
 def main(argv: list[str]) -> None:
     which = argv[1:] or ["kernel", "e2e", "batch", "mips"]
     if which[0] in ("-h", "--help"):
@@ -323,7 +406,7 @@ def main(argv: list[str]) -> None:
             raise SystemExit("usage: python benchmarks/bench.py ibl --baseline PYTHON")
         baseline = which[at + 1]
         which = which[:at] + which[at + 2 :]
-    unknown = set(which) - {"kernel", "e2e", "batch", "mips", "ibl", "preview"}
+    unknown = set(which) - {"kernel", "e2e", "batch", "mips", "ibl", "preview", "memory"}
     if unknown:
         raise SystemExit(f"unknown benchmark {', '.join(sorted(unknown))}; see --help")
     if "kernel" in which:
@@ -338,6 +421,8 @@ def main(argv: list[str]) -> None:
         bench_ibl(baseline=baseline)
     if "preview" in which:
         bench_preview()
+    if "memory" in which:
+        bench_memory()
 
 
 if __name__ == "__main__":

@@ -1,24 +1,29 @@
-"""Running and planning pipelines: the walk over the steps behind :class:`Pipeline`.
+"""The one walker over pipeline steps: it checks, plans and runs them.
 
-Private to :mod:`envconv.pipeline`, whose docstring states the fan-out rule implemented here.
+Private to :mod:`envconv.pipeline`, whose docstring states the rules implemented here. One
+:class:`Walk` goes over the steps in one of three modes, with the same state changes in each, so
+what is checked, what is planned and what runs cannot drift apart:
+
+* ``check``: no file is touched; the order of the steps and the ``Write`` paths are checked.
+* ``plan``: headers only; every output's layout, size, levels and files, and each write's
+  output settings (bit depth, compression, colour space).
+* ``run``: pixels are read, prepared, resampled, changed and written.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import inspect
 import logging
 import os
+from dataclasses import dataclass, replace
 from types import SimpleNamespace
 from typing import Any
 
-import numpy as np
-
 from . import io
-from .envmap import EnvMap
-from .errors import UsageError
+from .errors import EnvconvError, ImageIOError, UsageError
 from .layouts import get_layout
-from .pipeline import (
+from .steps import (
+    _IO_PLACEHOLDERS,
+    VARIABLES,
     Colorspace,
     Exposure,
     Output,
@@ -30,12 +35,13 @@ from .pipeline import (
     compose_rotations,
     count_levels,
     path_variables,
+    template_names,
 )  # fmt: skip
-from .resample import convert, default_size
 
 __all__ = ["Walk", "SourceHeader"]
 
 log = logging.getLogger(__name__)
+MODES = ("check", "plan", "run")
 
 
 class SourceHeader:
@@ -47,7 +53,7 @@ class SourceHeader:
         level = int(options.get("level", 0) or 0)
         layout, first = options.get("layout"), path
         if "{face}" in path:
-            from .face_files import find_face_files
+            from .io.face_files import find_face_files
 
             files = find_face_files(path, layout, options.get("faces"))
             layout, first = files.layout, files.paths[0]
@@ -58,187 +64,299 @@ class SourceHeader:
         self.layout, self.guard, self.channels, self.size = found, guard, channels, size
 
 
-class Walk:
-    """One pass over the steps; executes them, or only plans them from headers."""
+@dataclass
+class _Latest:
+    """The latest output: its record, its pixels (run mode), whether a write has taken it,
+    whether it is the source itself, whether a rotate came after it, and the colour space a
+    colorspace step put it in ((name, config) or None)."""
 
-    def __init__(self, pipeline, executing: bool, keep: bool = False, written=None):
-        self.pipeline, self.executing, self.keep = pipeline, executing, keep
+    record: Output | None
+    env: Any
+    layout: str | None
+    written: bool = False
+    is_source: bool = False
+    stale_at: int | None = None
+    space: tuple[str, str | None] | None = None
+
+
+class Walk:
+    """One pass over the steps in ``mode`` (``check``, ``plan`` or ``run``).
+
+    ``written`` collects each file as it is written (run mode); ``warnings`` collects one-line
+    warnings (NaN/Inf, clipping) when it is a list, else they are logged. ``targets`` lists
+    (file, no_clobber) of every write (plan and run modes).
+    """
+
+    def __init__(self, variables: dict[str, str], mode: str, keep: bool = False,
+                 written: list[str] | None = None, warnings: list[str] | None = None) -> None:  # fmt: skip
+        assert mode in MODES, mode
+        self.variables, self.mode, self.keep = variables, mode, keep
         self.written = written if written is not None else []
+        self.warnings = warnings
         self.outputs: list[Output] = []
+        self.targets: list[tuple[str, bool]] = []
         self.source: Any = None
+        self.source_space: tuple[str, str | None] | None = None
         self.input: str | None = None
         self.rotation = None
-        self.current: tuple[Output, Any] | None = None  # (record, EnvMap or None) unwritten-first
-        self.current_written = False
+        self.latest: _Latest | None = None
+        self.index = 0
 
-    def walk(self, steps: list[Step]) -> list[Output]:
-        for step in steps:
+    def walk(self, steps: list[Step], require_writes: bool = False) -> list[Output]:
+        for self.index, step in enumerate(steps, 1):
+            if not isinstance(step, Read) and self.input is None and self.source is None:
+                raise UsageError(f"{self._where(step)}: comes before any read")
             getattr(self, f"_{step.kind}")(step)
+            if require_writes and isinstance(step, Resample) and not _written_later(steps, self.index):
+                raise UsageError(f"{self._where(step)}: this resample is never written; "
+                                 "add a write step")  # fmt: skip
         return self.outputs
+
+    def _where(self, step: Step) -> str:
+        return f"step {self.index} ({step.kind})"
+
+    def _warn(self, messages: list[str]) -> None:
+        if self.warnings is None:
+            for message in messages:
+                log.warning("%s", message)
+        else:
+            self.warnings.extend(messages)
+
+    # --- read, rotate, pixel steps ----------------------------------------------------------
 
     def _read(self, step: Read) -> None:
         self.input = step.params["path"]
-        if self.executing:
-            self.source = io.read(self.input, **step.options)
-        else:
-            self.source = SourceHeader(self.input, step.options)
-        self.rotation, self.current = None, None
+        if self.input is None:
+            raise UsageError(f"{self._where(step)}: read needs a file (only a batch supplies one)")
+        if self.mode == "run":
+            from .prepare import prepare_input
 
-    def _source_or_output(self):
-        if self.current is not None and not self.current_written:
-            return "output"
-        self.current = None
-        return "source"
+            source = io.read(self.input, **step.read_options)
+            self.source, notes = prepare_input(source, **step.prepare_options)
+            self._warn(notes)
+        elif self.mode == "plan":
+            self.source = SourceHeader(self.input, step.read_options)
+        else:
+            self.source = SimpleNamespace()
+        self.rotation, self.latest, self.source_space = None, None, None
 
     def _rotate(self, step: Rotate) -> None:
-        self._source_or_output()
+        latest = self.latest
+        if latest is not None and not latest.written:
+            raise UsageError(f"{self._where(step)}: rotate follows a resample, so the output "
+                             "would be resampled twice; put rotate before resample")  # fmt: skip
+        if latest is not None and latest.is_source:
+            self.latest = None  # a later write resamples the turned source into its layout
+        elif latest is not None:
+            latest.stale_at = self.index
         self.rotation = compose_rotations(self.rotation, step.params["angles"])
 
     def _exposure(self, step: Exposure) -> None:
-        self._pixel_op(lambda env: _apply_exposure(env, step.params["stops"]))
+        self._pixel_step(lambda env: _apply_exposure(env, step.params["stops"]), None)
 
     def _colorspace(self, step: Colorspace) -> None:
-        self._pixel_op(lambda env: _apply_colorspace(env, **step.params))
+        params = step.params
+        self._pixel_step(lambda env: _apply_colorspace(env, **params),
+                         (params["dst"], params["config"]))  # fmt: skip
 
-    def _pixel_op(self, fn) -> None:
-        if not self.executing:
+    def _pixel_step(self, fn, space) -> None:
+        """Change the latest output alone while it is unwritten; after a write (or with no
+        output), change the source and the latest output both."""
+        latest, run = self.latest, self.mode == "run"
+        if latest is not None and not latest.written:
+            self._change_latest(fn, space, run)
             return
-        if self._source_or_output() == "output":
-            record, env = self.current
-            env = fn(env)
-            self.current = (record, env)
-            if record.envmap is not None:
-                record.envmap = env
-        else:
+        if run:
             self.source = fn(self.source)
+        self.source_space = space or self.source_space
+        if latest is not None:
+            if latest.is_source:
+                latest.env = self.source if run else None
+                latest.space = self.source_space
+                if latest.record is not None and latest.record.envmap is not None:
+                    latest.record.envmap = self.source
+            else:
+                self._change_latest(fn, space, run)
+
+    def _change_latest(self, fn, space, run: bool) -> None:
+        latest = self.latest
+        if run:
+            latest.env = fn(latest.env)
+            if latest.record.envmap is not None:
+                latest.record.envmap = latest.env
+        latest.space = space or latest.space
+
+    # --- resample and write -----------------------------------------------------------------
 
     def _resample(self, step: Resample) -> None:
-        kwargs = step.convert_kwargs(self.rotation)
-        self._make_output(step.params["to"], kwargs, step.params["mips"])
+        self._make_output(step.params["to"], step.convert_kwargs(self.rotation), step.params["mips"])
 
     def _make_output(self, to: str, kwargs: dict[str, Any], mips: Any) -> None:
         layout = get_layout(to)
-        guard = kwargs.get("guard", 0)
-        guard = 0 if guard == "fill" else int(guard)
-        if self.executing:
-            env = convert(self.source, **kwargs)
-            size = env.size
-        else:
-            env = None
-            size = kwargs.get("size") or default_size(
-                SimpleNamespace(size=self.source.size, layout=self.source.layout), layout,
-                kwargs.get("out_convention"),
-            )  # fmt: skip
-        width, height = layout.file_size(size, guard)
-        levels = count_levels(width, height, mips)
-        record = Output(self.input, layout.name, int(size), guard, width, height, levels)
-        record.envmap = env if self.keep else None
-        self.outputs.append(record)
-        self.current, self.current_written = (record, env), False
+        record, env = None, None
+        if self.mode != "check":
+            guard = kwargs.get("guard", 0)
+            guard = 0 if guard == "fill" else int(guard)
+            if self.mode == "run":
+                from .resample import convert
+
+                env = convert(self.source, **kwargs)
+                size = env.size
+            else:
+                from .resample import default_size
+
+                size = kwargs.get("size") or default_size(
+                    SimpleNamespace(size=self.source.size, layout=self.source.layout), layout,
+                    kwargs.get("out_convention"),
+                )  # fmt: skip
+            width, height = layout.file_size(size, guard)
+            record = Output(self.input, layout.name, int(size), guard, width, height,
+                            count_levels(width, height, mips))  # fmt: skip
+            record.envmap = env if self.keep else None
+            self.outputs.append(record)
+        self.latest = _Latest(record, env, layout.name, space=self.source_space)
 
     def _write(self, step: Write) -> None:
-        if self.current is None:
+        self._check_template(step)
+        latest = self.latest
+        if latest is not None and latest.stale_at is not None:
+            raise UsageError(f"{self._where(step)}: the latest output was resampled before the "
+                             f"rotate of step {latest.stale_at}; add a resample after the "
+                             "rotate")  # fmt: skip
+        if latest is None:
             if self.rotation is not None:
-                src = self.source
-                self._make_output(src.layout.name, {"to": src.layout.name, "size": src.size,
-                                  "guard": src.guard, "rotate": self.rotation}, None)  # fmt: skip
+                layout = None if self.mode == "check" else self.source.layout.name
+                kwargs = {} if self.mode == "check" else {
+                    "to": layout, "size": self.source.size, "guard": self.source.guard,
+                    "rotate": self.rotation}  # fmt: skip
+                self._make_output(layout or "latlong", kwargs, None)
+                self.latest.layout = layout
             else:
                 self._write_source()
-        record, env = self.current
-        variables = {**path_variables(self.input), **self.pipeline.variables,
-                     "layout": record.layout, "size": record.size}  # fmt: skip
-        path = step.target(variables)
-        files = _output_paths(record.layout, path, record.levels, step.options.get("faces"))
-        preview = step.target(variables, "preview") if step.params.get("preview") else None
-        if self.executing:
-            if step.params["makedirs"]:
-                for directory in {os.path.dirname(os.path.abspath(f)) for f in files}:
-                    os.makedirs(directory, exist_ok=True)
-            files = io.write(env, path, **step.options)
-            if preview is not None:
-                files.append(_write_preview(env, preview))
-            log.info("wrote %s", ", ".join(files))
-        elif preview is not None:
-            files = [*files, preview]
-        self.written.extend(files)
-        record.files.extend(files)
-        self.current_written = True
+        if self.mode != "check":
+            self._write_files(step, self.latest)
+        self.latest.written = True
+
+    def _check_template(self, step: Write) -> None:
+        known = set(VARIABLES) | set(self.variables) | set(_IO_PLACEHOLDERS)
+        template = step.params["path"]
+        for name in template_names(template) + template_names(step.params["preview"] or ""):
+            if name not in known:
+                raise UsageError(f"{self._where(step)}: path: unknown variable {{{name}}} in "
+                                 f"{template!r}; known: "
+                                 + ", ".join(f"{{{k}}}" for k in sorted(known)))  # fmt: skip
+        layout = self.latest.layout if self.latest is not None else None
+        if layout is not None and not self.latest.is_source:
+            try:
+                io.output_paths(layout, template, faces=step.options.get("faces"))
+            except EnvconvError as exc:
+                raise UsageError(f"{self._where(step)}: path: {exc}") from None
 
     def _write_source(self) -> None:
-        src = self.source
-        width, height = src.layout.file_size(src.size, src.guard)
-        record = Output(self.input, src.layout.name, src.size, src.guard, width, height,
-                        envmap=src if (self.keep and self.executing) else None)  # fmt: skip
-        self.outputs.append(record)
-        self.current, self.current_written = (record, src if self.executing else None), False
+        record, src = None, self.source
+        if self.mode != "check":
+            width, height = src.layout.file_size(src.size, src.guard)
+            record = Output(self.input, src.layout.name, src.size, src.guard, width, height)
+            if self.keep and self.mode == "run":
+                record.envmap = src
+            self.outputs.append(record)
+        env = src if self.mode == "run" else None
+        layout = None if self.mode == "check" else src.layout.name
+        self.latest = _Latest(record, env, layout, is_source=True, space=self.source_space)
+
+    def _write_files(self, step: Write, latest: _Latest) -> None:
+        record = latest.record
+        variables = {**path_variables(self.input), "layout": record.layout, "size": record.size}
+        path = step.target(variables, user=self.variables)
+        options = dict(step.options)
+        if latest.space is not None and not options.get("output_colorspace"):
+            # A colorspace step chose the colour space: the write keeps it (and tags it).
+            options["output_colorspace"] = latest.space[0]
+            if latest.space[1] and not options.get("ocio_config"):
+                options["ocio_config"] = latest.space[1]
+        files = _output_paths(record.layout, path, record.levels, options.get("faces"))
+        preview = step.target(variables, "preview", self.variables) if step.params["preview"] else None
+        self.targets += [(f, step.params["no_clobber"]) for f in [*files, *([preview] if preview else [])]]
+        if self.mode == "plan":
+            _check_output_settings(path, options)
+            files = [*files, *([preview] if preview else [])]
+        else:
+            files = self._write_env(step, latest.env, path, preview, options)
+        self.written.extend(files)
+        record.files.extend(files)
+
+    def _write_env(self, step: Write, env, path: str, preview: str | None, options) -> list[str]:
+        targets = [path, *([preview] if preview else [])]
+        if step.params["makedirs"]:
+            for directory in {os.path.dirname(os.path.abspath(f)) for f in targets}:
+                try:
+                    os.makedirs(directory, exist_ok=True)
+                except OSError as exc:  # a regular file on the way, /proc, no permission
+                    raise ImageIOError(f"cannot write {path}: cannot make folder {directory}: "
+                                       f"{exc.strerror or exc}") from None  # fmt: skip
+        notes: list[str] = []
+        files = io.write(env, path, warnings=notes, **options)
+        self._warn(notes)
+        if preview is not None:
+            files.append(_write_preview(env, preview))
+        log.info("wrote %s", ", ".join(files))
+        return files
+
+
+def _written_later(steps: list[Step], index: int) -> bool:
+    for step in steps[index:]:
+        if isinstance(step, Write):
+            return True
+        if isinstance(step, (Resample, Read)):
+            return False
+    return False
+
+
+def _check_output_settings(path: str, options: dict[str, Any]) -> None:
+    """Fail before any pixel on a bad bit depth, compression or output colour space."""
+    from .io.encode import plan_output
+
+    plan_output(path, "float", {}, options.get("output_colorspace"), options.get("bit_depth"),
+                options.get("ocio_config"), options.get("compression"))  # fmt: skip
 
 
 def _write_preview(env, path: str) -> str:
     """A tone-mapped 8-bit picture of ``env`` at ``path`` (a write step's ``preview``)."""
-    from .picture_io import write_picture
+    from .io.picture import write_picture
     from .preview import preview_picture
 
     return write_picture(preview_picture(env), path)
 
 
 def _output_paths(layout: str, path: str, levels: int, faces=None) -> list[str]:
-    """io.output_paths, expanding ``{level}`` here if this io does not know it yet."""
-    if faces is not None:
-        return io.output_paths(layout, path, levels, faces=faces)
-    if "levels" in inspect.signature(io.output_paths).parameters:
-        return io.output_paths(layout, path, levels)
-    files = io.output_paths(layout, path)
-    if "{level}" not in path:
-        return files
-    return [f.replace("{level}", str(k)) for k in range(levels) for f in files]
+    return io.output_paths(layout, path, levels, faces=faces)
 
 
-def _colour_indices(env: EnvMap) -> list[int]:
-    return [i for i in range(len(env.channels)) if i != env.alpha_index]
+def _apply_exposure(env, stops: float):
+    from .color import apply_exposure
+    from .envmap import map_levels
+
+    return map_levels(env, lambda pixels: apply_exposure(pixels, stops))
 
 
-def _map_pixels(env: EnvMap, fn, metadata=None) -> EnvMap:
-    """``env`` with ``fn`` applied to its colour channels (alpha untouched) and mip levels."""
-    idx = _colour_indices(env)
+def _apply_colorspace(env, dst: str, src: str | None, config: str | None):
+    """``env`` converted by OCIO from ``src`` (default: its ``oiio:ColorSpace``) to ``dst``."""
+    from .color import (
+        colorspace_from_metadata,
+        config_for,
+        convert_keeping_nonfinite,
+        metadata_name,
+        resolve_colorspace,
+    )
+    from .envmap import map_levels
 
-    def apply(pixels: np.ndarray) -> np.ndarray:
-        out = pixels.copy()
-        out[..., idx] = fn(pixels[..., idx])
-        return out
-
-    changes: dict[str, Any] = {"pixels": apply(env.pixels)}
-    if getattr(env, "levels", None) is not None:
-        changes["levels"] = [changes["pixels"], *(apply(level) for level in env.levels[1:])]
-    if metadata is not None:
-        changes["metadata"] = metadata
-    return dataclasses.replace(env, **changes)
-
-
-def _apply_exposure(env: EnvMap, stops: float) -> EnvMap:
-    try:
-        from .color import apply_exposure
-    except ImportError:
-
-        def apply_exposure(pixels, stops):
-            return pixels * np.float32(2.0**stops)
-
-    return _map_pixels(env, lambda colour: apply_exposure(colour, stops))
-
-
-def _apply_colorspace(env: EnvMap, dst: str, src: str | None, config: str | None) -> EnvMap:
-    try:
-        from .color import convert_colorspace, load_config
-    except ImportError:
-        raise UsageError("colorspace: this envconv build has no colour management") from None
-    ocio = load_config(config)
+    ocio = config_for(config)
     if src is None:
-        from .color import colorspace_from_metadata
-
         src = colorspace_from_metadata(env.metadata.get("oiio:ColorSpace"), ocio)
     if not src:
         raise UsageError("colorspace: the input's colour space is unknown; give it (--from)")
-    return _map_pixels(
-        env,
-        lambda colour: convert_colorspace(colour, src, dst, ocio),
-        metadata={**env.metadata, "oiio:ColorSpace": dst},
-    )
+    src, dst = resolve_colorspace(ocio, src), resolve_colorspace(ocio, dst)
+    metadata = {**env.metadata, "oiio:ColorSpace": metadata_name(ocio, dst)}
+    metadata.pop("chromaticities", None)
+    changed = map_levels(env, lambda px: convert_keeping_nonfinite(px, src, dst, ocio))
+    return replace(changed, metadata=metadata)

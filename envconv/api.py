@@ -7,10 +7,8 @@ import os
 from typing import Any
 
 from . import io
-from .errors import UsageError
-from .resample import convert
 
-__all__ = ["convert_file", "plan_convert", "route_face_sets"]
+__all__ = ["convert_file", "convert_pipeline", "plan_convert", "route_face_sets"]
 
 log = logging.getLogger(__name__)
 
@@ -27,44 +25,37 @@ def convert_file(
 ) -> list[str]:
     """Read ``input_path``, resample, write ``output_path``; return the paths written.
 
-    ``preview``: also write a tone-mapped 8-bit picture of the result there (automatic
-    exposure, ACES SDR view: :func:`envconv.preview.preview_picture`); it is listed last.
+    This is the pipeline ``Read → Resample → Write`` (:func:`convert_pipeline`), run by the
+    engine that runs chains, graph files and batches, so it follows their rules: the output
+    policy is checked before any work (no output onto the input, no two outputs on one path,
+    ``write["no_clobber"]`` refuses an existing output; :mod:`envconv.outputs`), missing output
+    directories are created, and a bad ``{face}`` path, bit depth, compression or colour space
+    fails before any pixel is read.
 
     ``read``, ``resample`` and ``write`` are keyword arguments for :func:`envconv.io.read`,
-    :func:`envconv.resample.convert` and :func:`envconv.io.write`; ``color`` for
-    :func:`envconv.colorflow.prepare_input` (exposure, NaN/Inf, negatives). Reading converts
-    the source to scene-linear float32 and writing converts it to the output colour space. The output path is checked against the layout before any
-    pixel is read, so a bad ``{face}`` path fails fast. One-line warnings (NaN/Inf, clipping)
-    are appended to ``warnings`` when it is a list, else logged at WARNING level.
+    :func:`envconv.resample.convert` and :func:`envconv.io.write` (plus ``no_clobber``);
+    ``color`` for :func:`envconv.prepare.prepare_input` (exposure, NaN/Inf, negatives).
+    Reading converts the source to scene-linear float32 and writing converts it to the output
+    colour space. ``preview``: also write a tone-mapped 8-bit picture of the result there
+    (:func:`envconv.preview.preview_picture`); it is listed last. One-line warnings (NaN/Inf,
+    clipping) are appended to ``warnings`` when it is a list, else logged at WARNING level.
     """
-    from .colorflow import plan_output, prepare_input
+    pipeline = convert_pipeline(input_path, output_path, read, resample, write, color, preview)
+    written: list[str] = []
+    pipeline.run(keep=False, written=written, warnings=warnings)
+    return written
+
+
+def convert_pipeline(input_path, output_path, read=None, resample=None, write=None, color=None,
+                     preview=None):  # fmt: skip
+    """The :class:`~envconv.pipeline.Pipeline` ``Read → Resample → Write`` of one conversion
+    (arguments as :func:`convert_file`'s)."""
+    from .pipeline import Pipeline, Read, Resample, Write
 
     read, resample, write = dict(read or {}), dict(resample or {}), dict(write or {})
     route_face_sets(input_path, read, resample, write)
-    to = resample.pop("to")
-    outputs = io.output_paths(to, output_path, faces=write.get("faces"))
-    _refuse_writing_onto_inputs(input_path, read.get("layout"), read.get("faces"), outputs)
-    if preview is not None and os.path.abspath(preview) in (os.path.abspath(output_path),
-                                                            os.path.abspath(input_path)):  # fmt: skip
-        raise UsageError(f"--preview {preview} would overwrite the input or the output")
-    # Fail fast on a bad --bit-depth, --compression or --output-colorspace, before reading.
-    plan_output(output_path, "float", {}, write.get("output_colorspace"), write.get("bit_depth"),
-                write.get("ocio_config"), write.get("compression"))  # fmt: skip
-    source = io.read(input_path, **read)
-    source, notes = prepare_input(source, **(color or {}))
-    if warnings is None:
-        for note in notes:
-            log.warning("%s", note)
-    else:
-        warnings.extend(notes)
-    result = convert(source, to, **resample)
-    paths = io.write(result, output_path, **write, warnings=warnings)
-    if preview is not None:
-        from .picture_io import write_picture
-        from .preview import preview_picture
-
-        paths.append(write_picture(preview_picture(result), preview))
-    return paths
+    return Pipeline([Read(input_path, **read, **(color or {})), Resample(**resample),
+                     Write(output_path, preview=preview, **write)])  # fmt: skip
 
 
 def plan_convert(
@@ -81,16 +72,15 @@ def plan_convert(
     file), ``levels``, ``channels``, ``bit_depth``, ``compression`` (None: format default),
     ``input_colorspace``, ``working_colorspace`` and ``output_colorspace`` (OCIO names).
     """
-    from .colorflow import WORKING_COLORSPACE, input_colorspace_of, plan_output
-    from .pipeline import Pipeline, Read, Resample, Write
+    from .color import WORKING_COLORSPACE, input_colorspace_of
+    from .io.encode import plan_output
+    from .io.face_files import first_file
 
     read, write, color = dict(read or {}), dict(write or {}), dict(color or {})
     resample = dict(resample or {})
+    output = convert_pipeline(input_path, output_path, read, resample, write, color).plan()[0]
     route_face_sets(input_path, read, resample, write)
-    faces = {"faces": write["faces"]} if write.get("faces") else {}
-    output = Pipeline([Read(input_path, **read), Resample(**resample),
-                       Write(output_path, **faces)]).plan()[0]  # fmt: skip
-    first = _first_file(os.fspath(input_path), read.get("layout"), read.get("faces"))
+    first = first_file(input_path, read.get("layout"), read.get("faces"))
     level, part = int(read.get("level", 0) or 0), read.get("part")
     _, _, channels, metadata = io.read_header(first, level, part)
     pixel_type = io.read_pixel_type(first, part)
@@ -112,35 +102,6 @@ def plan_convert(
         "compression": plan.compression, "input_colorspace": source,
         "working_colorspace": working, "output_colorspace": plan.colorspace,
     }  # fmt: skip
-
-
-def _refuse_writing_onto_inputs(input_path, layout, faces, outputs: list[str]) -> None:
-    """UsageError, before any work, when an output file is an input file (the same path, or
-    the same file through a link): envconv never writes onto its input."""
-    path = os.fspath(input_path)
-    if "{face}" in path:
-        from .face_files import find_face_files
-
-        inputs = find_face_files(path, layout, faces).paths
-    else:
-        inputs = [path]
-    existing = [p for p in inputs if os.path.exists(p)]
-    for output in outputs:
-        if not os.path.exists(output):
-            continue
-        for source in existing:
-            if os.path.samefile(output, source):
-                raise UsageError(f"{output} is the input {source}; envconv never writes onto its "
-                                 "input: choose another output path")  # fmt: skip
-
-
-def _first_file(path: str, layout: str | None, faces=None) -> str:
-    """The file whose header stands for a (possibly ``{face}``) input path."""
-    if "{face}" not in path:
-        return path
-    from .face_files import find_face_files
-
-    return find_face_files(path, layout, faces).paths[0]
 
 
 def route_face_sets(input_path, read: dict, resample: dict, write: dict) -> None:

@@ -30,18 +30,24 @@ from collections.abc import Callable, Iterable
 from dataclasses import dataclass, field
 from typing import Any
 
+from . import io
 from .errors import EnvconvError, ImageIOError, UsageError
 from .io import FORMATS
+from .io.temps import is_temp_name
+from .outputs import check_outputs, input_files
 from .pipeline import Pipeline, Read, Resample, Write, path_variables
 
 __all__ = [
-    "Job", "BatchResult", "MODES", "expand_inputs", "make_jobs", "run_job", "run_batch",
-    "report_data", "write_report", "worker_threads",
+    "Job", "BatchResult", "BatchInterrupted", "MODES", "STATUSES", "expand_inputs", "make_jobs",
+    "run_job", "run_batch", "report_data", "write_report", "worker_threads",
 ]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
 MODES = ("all", "skip-existing", "update")
+#: A record's status; ``cancelled``: not run (or not finished) because the batch was
+#: interrupted.
+STATUSES = ("done", "skipped", "failed", "cancelled")
 _GLOB_CHARS = set("*?[")
 
 
@@ -62,15 +68,18 @@ class Job:
 
 @dataclass
 class BatchResult:
-    """Records in job order, and the wall time of the whole batch in seconds."""
+    """Records in job order, the wall time of the whole batch in seconds, and what happened
+    to the batch itself (``events``: workers that died, an interruption)."""
 
     records: list[dict[str, Any]]
     seconds: float = 0.0
     counts: dict[str, int] = field(default_factory=dict)
+    events: list[str] = field(default_factory=list)
 
     def __post_init__(self) -> None:
-        self.counts = {s: sum(r["status"] == s for r in self.records)
-                       for s in ("done", "skipped", "failed")}  # fmt: skip
+        # ``cancelled`` is counted only in an interrupted batch.
+        counts = {s: sum(r["status"] == s for r in self.records) for s in STATUSES}
+        self.counts = {s: n for s, n in counts.items() if n or s != "cancelled"}
 
     @property
     def ok(self) -> bool:
@@ -82,20 +91,22 @@ def expand_inputs(patterns: Iterable[str]) -> list[str]:
 
     A directory contributes its image files (by extension, not recursive). A glob or directory
     that yields nothing, or a plain path that does not exist, is an error before any work.
+    envconv's own temporary files (:func:`envconv.io.temps.is_temp_name`) are never inputs.
     """
     found: dict[str, None] = {}
     for pattern in patterns:
         pattern = os.fspath(pattern)
         if os.path.isdir(pattern):
             names = sorted(n for n in os.listdir(pattern)
-                           if os.path.splitext(n)[1].lower() in FORMATS)  # fmt: skip
+                           if os.path.splitext(n)[1].lower() in FORMATS and not is_temp_name(n))  # fmt: skip
             matches = [os.path.join(pattern, n) for n in names]
         elif "{face}" in pattern or not (_GLOB_CHARS & set(pattern)):
             if "{face}" not in pattern and not os.path.exists(pattern):
                 raise ImageIOError(f"input not found: {pattern}")
             matches = [pattern]
         else:
-            matches = sorted(p for p in glob.glob(pattern, recursive=True) if os.path.isfile(p))
+            matches = sorted(p for p in glob.glob(pattern, recursive=True)
+                             if os.path.isfile(p) and not is_temp_name(p))  # fmt: skip
         if not matches:
             raise ImageIOError(f"no input files match {pattern}")
         for match in matches:
@@ -103,30 +114,40 @@ def expand_inputs(patterns: Iterable[str]) -> list[str]:
     return list(found)
 
 
-def make_jobs(inputs: Iterable[str | None], pipeline: Pipeline) -> list[Job]:
+def make_jobs(inputs: Iterable[str | None], pipeline: Pipeline, no_clobber: bool = False) -> list[Job]:
     """One job per input, with relative write paths made absolute against the current
-    directory; raise UsageError when two jobs would write the same file."""
-    steps = [_absolute_write(s) for s in pipeline.steps]
+    directory, every write refusing existing files when ``no_clobber``.
+
+    Raises UsageError, before any work, when an output is an input of the batch (any job's,
+    through links too), when two outputs share a path (in one job or across jobs), and with
+    ``no_clobber`` when an output exists (:mod:`envconv.outputs`). Outputs whose path needs a
+    file header (``{size}`` without a resample size) are checked when their job runs.
+    """
+    steps = [_absolute_write(s, no_clobber) for s in pipeline.steps]
     rebased = Pipeline(steps, pipeline.variables)
     jobs = [Job(None if i is None else os.path.abspath(i), rebased) for i in inputs]
-    seen: dict[str, str] = {}
+    outputs, read = [], []
     for job in jobs:
-        for path in _static_outputs(job):
-            if path in seen and seen[path] != job.name:
-                raise UsageError(f"{seen[path]} and {job.name} would both write {path}; "
-                                 "put {stem} or {dir} in the output path")  # fmt: skip
-            seen[path] = job.name
+        for step in job.pipeline.bound(job.input):
+            if isinstance(step, Read):
+                read += input_files(step.params["path"], step.params.get("layout"),
+                                    step.params.get("faces"))  # fmt: skip
+        outputs += [(path, refuse, job.name) for path, refuse in _static_outputs(job)]
+    check_outputs(outputs, read)
     return jobs
 
 
-def _absolute_write(step):
-    if isinstance(step, Write) and step.params["base"] is None:
-        return Write(**{**step.params, "base": os.getcwd()})
+def _absolute_write(step, no_clobber: bool):
+    if isinstance(step, Write) and (step.params["base"] is None or no_clobber):
+        base = step.params["base"] if step.params["base"] is not None else os.getcwd()
+        return Write(**{**step.params, "base": base,
+                        "no_clobber": step.params["no_clobber"] or no_clobber})  # fmt: skip
     return step
 
 
-def _static_outputs(job: Job) -> list[str]:
-    """Output paths that follow from names alone (skips those that need a file header)."""
+def _static_outputs(job: Job) -> list[tuple[str, bool]]:
+    """(path, no_clobber) of the outputs that follow from names alone (those that need a file
+    header are left out), previews included."""
     out, to, sized, variables = [], None, False, path_variables(job.input)
     for step in job.pipeline.bound(job.input):
         if isinstance(step, Read):
@@ -134,16 +155,28 @@ def _static_outputs(job: Job) -> list[str]:
         elif isinstance(step, Resample):
             to, sized = step.params["to"], step.params["size"]
         elif isinstance(step, Write):
-            values = {**variables, **job.pipeline.variables}
+            values = dict(variables)
             if to is not None:
                 values["layout"] = to
             if sized:
                 values["size"] = sized
-            try:
-                out.append(step.target(values))
-            except UsageError:
-                continue
+            for key in ("path", "preview") if step.params["preview"] else ("path",):
+                try:
+                    path = step.target(values, key, job.pipeline.variables)
+                    files = _named_files(path, to, step.options.get("faces"))
+                except EnvconvError:
+                    continue
+                out += [(f, step.params["no_clobber"]) for f in files]
     return out
+
+
+def _named_files(path: str, layout: str | None, faces) -> list[str]:
+    """The files of one write path when they follow from its name ({level} needs a header)."""
+    if "{level}" in path:
+        return []
+    if "{face}" in path:
+        return [] if layout is None else io.output_paths(layout, path, faces=faces)
+    return [path]
 
 
 def worker_threads(jobs: int, cores: int | None = None) -> int:
@@ -208,9 +241,19 @@ def run_job(job: Job, mode: str = "all") -> dict[str, Any]:
     return record
 
 
-def _failed(job: Job, exc: BaseException) -> dict[str, Any]:
-    return {"input": job.name, "status": "failed", "outputs": [], "seconds": 0.0,
-            "error": f"{type(exc).__name__}: {exc}"}  # fmt: skip
+def _failed(job: Job, exc: BaseException | str, status: str = "failed") -> dict[str, Any]:
+    error = exc if isinstance(exc, str) else f"{type(exc).__name__}: {exc}"
+    return {"input": job.name, "status": status, "outputs": [], "seconds": 0.0, "error": error}
+
+
+class BatchInterrupted(KeyboardInterrupt):
+    """A batch stopped by SIGINT/SIGTERM; ``result`` holds what finished (the rest
+    ``cancelled``) and ``cause`` the interruption, whose ``signum`` it carries."""
+
+    def __init__(self, result: BatchResult, cause: BaseException) -> None:
+        super().__init__(*cause.args)
+        self.result, self.cause = result, cause
+        self.signum = getattr(cause, "signum", 2)
 
 
 def run_batch(
@@ -225,10 +268,17 @@ def run_batch(
     Parameters
     ----------
     workers : int
-        Processes on this machine (``-j``); 1 runs in this process.
+        Processes on this machine (``-j``); 1 runs in this process. A worker that dies costs
+        only its own job, which runs once more on a fresh worker (:mod:`envconv.workers`).
     mode : {"all", "skip-existing", "update"}
     dask : str, optional
         Address of a Dask scheduler; the jobs then run there and ``workers`` is ignored.
+
+    Raises
+    ------
+    BatchInterrupted
+        On SIGINT/SIGTERM (KeyboardInterrupt): no further job starts, and the exception
+        carries the records of what finished, the rest ``cancelled``.
     """
     if mode not in MODES:
         raise UsageError(f"mode must be one of {', '.join(MODES)}, got {mode!r}")
@@ -240,40 +290,43 @@ def run_batch(
         if on_record is not None:
             on_record(record)
 
-    if dask:
-        _run_dask(dask, jobs, mode, finish)
-    elif workers <= 1 or len(jobs) <= 1:
-        for index, job in enumerate(jobs):
-            finish(index, run_job(job, mode))
-    else:
-        _run_processes(jobs, min(workers, len(jobs)), mode, finish)
+    events: list[str] = []
+    try:
+        if dask:
+            _run_dask(dask, jobs, mode, finish)
+        elif workers <= 1 or len(jobs) <= 1:
+            for index, job in enumerate(jobs):
+                finish(index, run_job(job, mode))
+        else:
+            events = _run_processes(jobs, min(workers, len(jobs)), mode, finish)
+    except KeyboardInterrupt as exc:  # SIGINT/SIGTERM: report what finished
+        from .interrupt import describe
+
+        done = [r if r is not None else _failed(j, describe(exc), "cancelled")
+                for r, j in zip(records, jobs, strict=True)]  # fmt: skip
+        result = BatchResult(done, round(time.perf_counter() - start, 4))
+        result.events.append(f"{describe(exc)}: {result.counts.get('cancelled', 0)} jobs cancelled")
+        raise BatchInterrupted(result, exc) from None
     done = [
         r if r is not None else _failed(j, RuntimeError("not run"))
         for r, j in zip(records, jobs, strict=True)
     ]
-    return BatchResult(done, round(time.perf_counter() - start, 4))
+    return BatchResult(done, round(time.perf_counter() - start, 4), events=events)
 
 
-def _run_processes(jobs: list[Job], workers: int, mode: str, finish) -> None:
-    import multiprocessing
-    from concurrent.futures import ProcessPoolExecutor, as_completed
+def _run_processes(jobs: list[Job], workers: int, mode: str, finish) -> list[str]:
+    from functools import partial
 
-    threads = worker_threads(workers)
-    # A forked child would inherit the parent's imported libraries' thread pools half-copied.
-    context = multiprocessing.get_context("spawn")
-    with ProcessPoolExecutor(workers, mp_context=context, initializer=_init_worker,
-                             initargs=(threads,)) as pool:  # fmt: skip
-        futures = {pool.submit(run_job, job, mode): i for i, job in enumerate(jobs)}
-        try:
-            for future in as_completed(futures):
-                index = futures[future]
-                try:
-                    finish(index, future.result())
-                except Exception as exc:  # a worker died (e.g. out of memory)
-                    finish(index, _failed(jobs[index], exc))
-        except BaseException:
-            pool.shutdown(wait=False, cancel_futures=True)
-            raise
+    from .workers import run_pool
+
+    return run_pool(jobs, workers, finish, call=partial(run_job, mode=mode),
+                    init=partial(_init_worker, worker_threads(workers)),
+                    failed=_failed, outputs=_output_files)  # fmt: skip
+
+
+def _output_files(job: Job) -> list[str]:
+    """The output paths of a job that follow from names alone (see :func:`_static_outputs`)."""
+    return [path for path, _ in _static_outputs(job)]
 
 
 def _run_dask(address: str, jobs: list[Job], mode: str, finish) -> None:
@@ -289,12 +342,16 @@ def _run_dask(address: str, jobs: list[Job], mode: str, finish) -> None:
     with client:
         futures = client.map(_run_job_on_dask_worker, jobs, mode=mode, pure=False)
         index = {future.key: i for i, future in enumerate(futures)}
-        for future in as_completed(futures):
-            i = index[future.key]
-            try:
-                finish(i, future.result())
-            except Exception as exc:  # a worker died
-                finish(i, _failed(jobs[i], exc))
+        try:
+            for future in as_completed(futures):
+                i = index[future.key]
+                try:
+                    finish(i, future.result())
+                except Exception as exc:  # a worker died
+                    finish(i, _failed(jobs[i], exc))
+        except KeyboardInterrupt:
+            client.cancel(futures)
+            raise
 
 
 def report_data(result: BatchResult) -> dict[str, Any]:
@@ -304,6 +361,7 @@ def report_data(result: BatchResult) -> dict[str, Any]:
     return {
         "envconv": __version__,
         "summary": {**result.counts, "total": len(result.records), "seconds": result.seconds},
+        "events": result.events,
         "files": result.records,
     }
 
@@ -312,15 +370,10 @@ def write_report(path: str | os.PathLike, result: BatchResult) -> None:
     """Write :func:`report_data` as JSON to ``path`` (through a temporary file and a rename)."""
     import json
 
-    path = os.fspath(path)
-    temp = f"{path}.envconv-{os.getpid()}.tmp"
+    from .io import write_bytes
+
+    text = json.dumps(report_data(result), indent=2) + "\n"
     try:
-        with open(temp, "w", encoding="utf-8") as handle:
-            json.dump(report_data(result), handle, indent=2)
-            handle.write("\n")
-        os.replace(temp, path)
-    except OSError as exc:
-        raise ImageIOError(f"cannot write report {path}: {exc.strerror or exc}") from None
-    finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+        write_bytes(text.encode("utf-8"), os.fspath(path))
+    except ImageIOError as exc:
+        raise ImageIOError(f"report: {exc}") from None

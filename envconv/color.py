@@ -9,12 +9,17 @@ interop ids (``lin_rec709_scene``) and a few friendly spellings (``linear``, ``s
 ``rec709``, ``acescg``, ``aces``, ``raw``). PyOpenColorIO is imported lazily, so importing this
 module is cheap. Every function is pure: nothing is read or written, nothing printed.
 
-Value range and bit depth (exposure, negatives, NaN/Inf, quantizing) live in
-:mod:`envconv.depth`; its names are re-exported here for older imports.
+The working space is linear Rec.709 (OCIO's ``lin_rec709_scene``): all resampling happens in
+scene-linear float32 there. :func:`to_working` converts a map into it (the input rule:
+``input_colorspace``, else the file's ``oiio:ColorSpace``, else the format's default: linear
+Rec.709 for float and half data, sRGB-encoded Rec.709 for 8- and 16-bit), keeping NaN and
+Inf in their own channel. Storing a map (quantizing, dither) lives in :mod:`envconv.quantize`;
+a file's output plan in :mod:`envconv.io.encode`.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import logging
 import os
@@ -24,21 +29,19 @@ from typing import Any
 
 import numpy as np
 
-# The value-range names moved to envconv.depth; re-exported for older imports.
-from envconv.depth import (  # noqa: F401
-    HALF_MAX,
-    ClipReport,
-    apply_exposure,
-    clamp_negative,
-    count_nonfinite,
-    fix_nonfinite,
-    quantize,
-)
-from envconv.depth import as_image as _as_image
-from envconv.depth import colour_slice as _colour
-from envconv.errors import ColorError
+from envconv.envmap import EnvMap, map_levels
+from envconv.errors import ColorError, UsageError
+from envconv.quantize import as_image as _as_image
+from envconv.quantize import colour_slice as _colour
 
 __all__ = [
+    "WORKING_COLORSPACE",
+    "config_for",
+    "input_colorspace_of",
+    "to_working",
+    "working_pixels",
+    "convert_keeping_nonfinite",
+    "apply_exposure",
     "load_config",
     "builtin_config",
     "resolve_colorspace",
@@ -391,3 +394,112 @@ def display_view(rgb: np.ndarray, view: str = "tone", config: Any = None) -> np.
     except ocio.Exception as exc:
         raise ColorError(f"cannot apply view {name!r}: {_one_line(exc)}") from exc
     return out.reshape(np.shape(rgb))
+
+
+#: The working space, as a friendly name resolved in the config (linear Rec.709).
+WORKING_COLORSPACE = "linear"
+
+
+@lru_cache(maxsize=8)
+def _load(path: str | None, env: str | None) -> Any:
+    if path is None and not (env or "").strip():
+        return builtin_config()
+    return load_config(path)
+
+
+def config_for(ocio_config: str | os.PathLike | None) -> Any:
+    """The config from ``ocio_config``, else ``$OCIO``, else ``ocio://default`` (cached)."""
+    path = None if ocio_config is None else os.fspath(ocio_config)
+    return _load(path, os.environ.get("OCIO"))
+
+
+def input_colorspace_of(
+    metadata: dict, pixel_type: str, input_colorspace: str | None = None, ocio_config=None
+) -> str:
+    """Canonical name of the colour space a map's pixels are in (the input rule).
+
+    ``input_colorspace`` when given, else the ``oiio:ColorSpace`` in ``metadata`` when the
+    config knows it, else linear Rec.709 for float/half and sRGB for integer ``pixel_type``.
+    """
+    config = config_for(ocio_config)
+    if input_colorspace:
+        return resolve_colorspace(config, input_colorspace)
+    found = colorspace_from_metadata(metadata.get("oiio:ColorSpace"), config)
+    return found or default_colorspace(config, "", pixel_type or "float")
+
+
+def convert_keeping_nonfinite(pixels: np.ndarray, src: str, dst: str, config: Any) -> np.ndarray:
+    """Colour conversion that keeps NaN/Inf in their own channel (a matrix would spread them)."""
+    if src == dst:  # nothing to convert: no NaN scan over the whole image
+        return convert_colorspace(pixels, src, dst, config)
+    sl = _colour(pixels.shape[2])
+    bad = ~np.isfinite(pixels[..., sl])
+    if not bad.any():
+        return convert_colorspace(pixels, src, dst, config)
+    clean = pixels.copy()
+    clean[..., sl] = np.where(bad, np.float32(0.0), pixels[..., sl])
+    out = convert_colorspace(clean, src, dst, config)
+    out[..., sl] = np.where(bad, pixels[..., sl], out[..., sl])
+    return out
+
+
+def working_pixels(
+    pixels: np.ndarray,
+    metadata: dict,
+    pixel_type: str,
+    input_colorspace: str | None = None,
+    ocio_config: str | os.PathLike | None = None,
+) -> np.ndarray:
+    """``pixels`` of a file with this ``metadata`` and ``pixel_type``, converted to the
+    working space as :func:`to_working` converts a map's (for images that are not maps)."""
+    config = config_for(ocio_config)
+    src = input_colorspace_of(metadata, pixel_type, input_colorspace, ocio_config)
+    return convert_keeping_nonfinite(pixels, src, resolve_colorspace(config, WORKING_COLORSPACE), config)
+
+
+def to_working(
+    envmap: EnvMap,
+    input_colorspace: str | None = None,
+    ocio_config: str | os.PathLike | None = None,
+) -> EnvMap:
+    """Convert a map's colour to the working space (linear Rec.709); no-op if it is there.
+
+    The map's colour space is ``input_colorspace``, else its ``oiio:ColorSpace``, else the
+    format default for its ``pixel_type`` (see :func:`input_colorspace_of`).
+    :func:`envconv.io.read` calls this, so maps it returns are already in the working space
+    (give it ``input_colorspace`` to override the file's). ``oiio:ColorSpace`` is set to the
+    working space; chromaticities are dropped when the colour changed (they described the
+    input). NaN and Inf stay where they were.
+    """
+    config = config_for(ocio_config)
+    src = input_colorspace_of(envmap.metadata, envmap.pixel_type, input_colorspace, ocio_config)
+    dst = resolve_colorspace(config, WORKING_COLORSPACE)
+    metadata = dict(envmap.metadata)
+    metadata.pop("colorInteropID", None)  # OIIO's EXR reader's copy of the colour space
+    metadata["oiio:ColorSpace"] = metadata_name(config, dst)
+    if src == dst:
+        return dataclasses.replace(envmap, metadata=metadata)
+    log.info("input colour space %s -> working space %s", src, dst)
+    metadata.pop("chromaticities", None)
+    return map_levels(envmap, lambda px: convert_keeping_nonfinite(px, src, dst, config), metadata=metadata)
+
+
+def apply_exposure(pixels: np.ndarray, stops: float) -> np.ndarray:
+    """Multiply the colour channels by ``2 ** stops`` (alpha and extras untouched).
+
+    Returns a new float32 array, or the input itself when ``stops == 0``.
+
+    Examples
+    --------
+    >>> apply_exposure(np.ones((1, 1, 4), np.float32), -1).ravel().tolist()
+    [0.5, 0.5, 0.5, 1.0]
+    """
+    stops = float(stops)
+    if not np.isfinite(stops):
+        raise UsageError(f"exposure must be a finite number of stops, got {stops}")
+    arr = _as_image(pixels)
+    if stops == 0.0:
+        return arr
+    out = arr.copy()
+    out[..., _colour(arr.shape[2])] *= np.float32(2.0**stops)
+    return out

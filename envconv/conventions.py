@@ -40,6 +40,9 @@ preset             layouts                           M (as AXES)            note
 ``unity``          cube-vcross/hcross/hstrip/vstrip, ``x,y,z``              6 Frames Layout, G faces
                    cube-faces
 ``unreal``         latlong                           ``z,y,-x``             long-lat cube import
+``threejs``        latlong                           ``z,y,-x``             ``equirectUv``, flipY
+``threejs``        cube-vcross/hcross/hstrip/vstrip, ``x,y,z``              CubeTexture px … nz,
+                   cube-faces                                               ``flipEnvMap`` −1
 ``ffmpeg``         latlong (``e``), cube-hstrip      ``-x,y,-z``            default ``rludfb``, no
                    (``c6x1``), cube-vstrip (``c1x6``)                       face rotation
 ``ffmpeg``         sphere (``ball``)                 ``x,y,-z``             mirror image (s = +1)
@@ -55,6 +58,16 @@ preset             layouts                           M (as AXES)            note
 =================  ================================  =====================  ========================
 
 A preset rejects every other layout with a one-line :class:`~envconv.errors.LayoutError`.
+Each preset also names its tool's world frame F (:func:`world_frame`, the map above: envconv's
+direction = F · tool's direction), which ``envconv preview --convention`` labels views with.
+
+three.js (``mrdoob/three.js``): ``equirectUv`` in ``src/renderers/shaders/ShaderChunk/common.glsl.js``
+gives u = atan(d_z, d_x)/2π + 0.5, v = asin(d_y)/π + 0.5 with v = 1 the image's top row (the
+default ``Texture.flipY = true``; ``examples/jsm/loaders/HDRLoader.js`` sets it too), so the
+image centre is +X and u = 0.75 is +Z: w = (d_z, d_y, −d_x). Cube textures are sampled at
+``vec3(flipEnvMap * reflectVec.x, reflectVec.yz)`` (``ShaderChunk/envmap_fragment.glsl.js``)
+with ``flipEnvMap = -1`` for a ``CubeTexture`` that is not a render target
+(``src/renderers/webgl/WebGLBackground.js``): the left-handed frame of envconv's own faces.
 
 Octahedral squares: pbrt-v4 (``util/math.cpp``, ``cmd/imgtool.cpp``) reads a lat-long at
 (atan2(y, x)/2π mod 1, acos(z)/π) for its direction e, which is envconv's w = (e_y, e_z, −e_x);
@@ -97,6 +110,7 @@ __all__ = [
     "axes_string",
     "resolve_convention",
     "environment_axes",
+    "world_frame",
     "apply_remap",
 ]
 
@@ -142,6 +156,8 @@ class Preset:
     layouts: dict[str, str]
     remaps: dict[str, tuple[tuple[int, int], ...]] = field(default_factory=dict)
     sizes: dict[str, str] = field(default_factory=dict)
+    #: The tool's world frame as AXES: envconv's direction = F · (tool's direction).
+    frame: str = "x,y,z"
 
 
 # OpenEXR faces in the six slots of a GL-table layout → envconv's faces (module docstring).
@@ -165,11 +181,13 @@ _PRESET_LIST = (
         "blender",
         "Blender Cycles Environment Texture (Z-up RH): equirectangular and mirror ball",
         {"latlong": "z,y,-x", "sphere": _IDENTITY},
+        frame="x,z,-y",
     ),
     Preset(
         "cmft",
         "cmft / Filament cmgen (Y-up, left-handed like D3D): latlong and G-face cubes",
         {"latlong": _IDENTITY, **dict.fromkeys(_CUBE_GL, _IDENTITY)},
+        frame="-x,y,z",
     ),
     Preset(
         "skylibs",
@@ -180,11 +198,18 @@ _PRESET_LIST = (
         "unity",
         "Unity Skybox/Panoramic (Y-up LH, +Z forward): latlong and 6 Frames Layout",
         {"latlong": "-z,y,x", **dict.fromkeys(_CUBE_GL, _IDENTITY)},
+        frame="-x,y,z",
     ),
     Preset(
         "unreal",
         "Unreal (Z-up LH, X forward, Y right): long-lat cubemap import; RTXGI octahedral probes",
         {"latlong": "z,y,-x", "octahedral": "z,y,x"},
+        frame="-y,z,x",
+    ),
+    Preset(
+        "threejs",
+        "three.js (Y-up RH): equirectangular textures (equirectUv, flipY) and CubeTexture faces",
+        {"latlong": "z,y,-x", **dict.fromkeys(_CUBE_GL, _IDENTITY)},
     ),
     Preset(
         "ffmpeg",
@@ -195,6 +220,7 @@ _PRESET_LIST = (
             "cube-vstrip": "-x,y,-z",
             "sphere": "x,y,-z",
         },
+        frame="x,-y,-z",
     ),  # fmt: skip
     Preset(
         "probe-back",
@@ -211,6 +237,7 @@ _PRESET_LIST = (
         "pbrt-v4 image infinite light: the equal-area square of imgtool makeequiarea",
         {"equal-area": "-z,y,-x"},
         sizes={"equal-area": "latlong-width"},
+        frame="y,z,-x",
     ),
     Preset(
         "ddgi",
@@ -221,6 +248,7 @@ _PRESET_LIST = (
         "ddgi-z-up",
         "DDGI/RTXGI octahedral probes (+Z centre) in a Z-up right-handed world",
         {"octahedral": _IDENTITY},
+        frame="x,z,-y",
     ),
 )
 
@@ -228,7 +256,8 @@ _PRESET_LIST = (
 PRESETS: dict[str, Preset] = {p.name: p for p in _PRESET_LIST}
 _ALIASES = {
     "none": "envconv", "identity": "envconv", "usd": "openexr", "filament": "cmft",
-    "pbrt-v4": "pbrt", "rtxgi": "ddgi", "rtxgi-z-up": "ddgi-z-up",
+    "pbrt-v4": "pbrt", "rtxgi": "ddgi", "rtxgi-z-up": "ddgi-z-up", "three.js": "threejs",
+    "three": "threejs",
 }  # fmt: skip
 
 
@@ -285,6 +314,16 @@ def _check_matrix(matrix) -> np.ndarray:
     return matrix
 
 
+def _preset_name(spec: str) -> str:
+    name = _ALIASES.get(spec.strip().lower(), spec.strip().lower())
+    if name not in PRESETS:
+        close = difflib.get_close_matches(name, list(PRESETS) + list(_ALIASES), n=3)
+        hint = f"; did you mean {', '.join(close)}?" if close else ""
+        raise UsageError(f"unknown convention {spec!r}{hint} (presets: {', '.join(PRESETS)}; "
+                         "or an axis remap such as -x,z,y)")  # fmt: skip
+    return name
+
+
 def resolve_convention(spec, layout: Layout | str) -> Convention:
     """Resolve a convention spec for ``layout``.
 
@@ -317,14 +356,7 @@ def resolve_convention(spec, layout: Layout | str) -> Convention:
     text = spec.strip()
     if "," in text:
         return Convention(parse_axes(text), None, text)
-    name = _ALIASES.get(text.lower(), text.lower())
-    if name not in PRESETS:
-        close = difflib.get_close_matches(name, list(PRESETS) + list(_ALIASES), n=3)
-        hint = f"; did you mean {', '.join(close)}?" if close else ""
-        raise UsageError(
-            f"unknown convention {spec!r}{hint} (presets: {', '.join(PRESETS)}; "
-            "or an axis remap such as -x,z,y)"
-        )
+    name = _preset_name(spec)
     preset = PRESETS[name]
     if name == "envconv":
         return Convention(np.eye(3), None, name)
@@ -355,6 +387,21 @@ def environment_axes(up: str | None = None, axes: str | None = None) -> np.ndarr
     if up is not None and str(up).lower() == "z":
         return parse_axes("x,z,-y")
     return np.eye(3)
+
+
+def world_frame(spec) -> tuple[np.ndarray, str]:
+    """(F, name) of a tool's world frame: envconv's direction = F · the tool's direction.
+
+    ``spec`` is a preset name (its :attr:`Preset.frame`), an AXES string (F itself, as for
+    ``--axes``) or None (envconv's frame, the identity).
+    """
+    if spec is None:
+        return np.eye(3), "envconv"
+    text = str(spec).strip()
+    if "," in text:
+        return parse_axes(text), text
+    name = _preset_name(text)
+    return parse_axes(PRESETS[name].frame), name
 
 
 def _cell_blocks(layout: Layout, pixels: np.ndarray, guard: int):

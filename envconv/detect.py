@@ -27,7 +27,7 @@ import numpy as np
 from .errors import LayoutError
 from .layouts import LAYOUTS, Layout, get_layout
 
-__all__ = ["detect_layout", "find_layout", "place_image", "misfit_message", "Found"]
+__all__ = ["detect_layout", "find_layout", "place_image", "misfit_message", "tagged_guard", "Found"]
 
 _UNIQUE_ASPECTS = {
     (3, 4): "cube-vcross",
@@ -51,12 +51,17 @@ class Found(NamedTuple):
     reason: str
 
 
+def tagged_guard(metadata: dict[str, Any]) -> int:
+    """The guard ring G a file's ``envconv:guard`` tag records (0 when untagged)."""
+    return int(metadata.get("envconv:guard", 0) or 0)
+
+
 def find_layout(
     width: int, height: int, metadata: dict[str, Any], pixels: np.ndarray | None = None
 ) -> Found:
     """The layout of a ``width`` × ``height`` image with this metadata, never raising."""
     tag = metadata.get("envconv:layout")
-    guard = int(metadata.get("envconv:guard", 0) or 0)
+    guard = tagged_guard(metadata)
     if tag in LAYOUTS:
         return Found(get_layout(tag), guard, (tag,), f"envconv:layout tag {tag}")
     envmap = str(metadata.get("envmap", "")).lower()
@@ -113,14 +118,24 @@ def _alternatives(names) -> str:
 
 
 def _black_outside_two_disks(pixels: np.ndarray) -> bool:
+    """Whether every colour value outside the two inscribed disks is 0 (and there is such a
+    value), tested a block of rows at a time: the mask of a whole map would be a float64
+    plane, 2/3 of an RGB float32 source."""
     height, width = pixels.shape[:2]
     n = height
     y = (np.arange(n) + 0.5) / n * 2 - 1
     x = (np.arange(width) + 0.5) / n
     x = np.where(x < 1.0, x * 2 - 1, (x - 1.0) * 2 - 1)
-    outside = (x[None, :] ** 2 + y[:, None] ** 2) > 1.0 + 4.0 / n
-    values = pixels[outside]
-    return bool(values.size) and bool(np.all(values[..., : min(3, pixels.shape[2])] == 0))
+    colour = min(3, pixels.shape[2])
+    rows = max(1, (1 << 20) // max(1, width))
+    found = False
+    for y0 in range(0, n, rows):
+        outside = (x[None, :] ** 2 + y[y0 : y0 + rows, None] ** 2) > 1.0 + 4.0 / n
+        values = pixels[y0 : y0 + rows][outside][..., :colour]
+        if np.any(values != 0):
+            return False
+        found = found or bool(values.size)
+    return found
 
 
 def _ratio(w: int, h: int) -> str:
@@ -181,9 +196,7 @@ def place_image(
         origin = f"named by its {detected.reason.rsplit(' ', 1)[0]}"  # "… envconv:layout tag"
     else:
         found = get_layout(layout)
-        guard = int(metadata.get("envconv:guard", 0) or 0)
-        if metadata.get("envconv:layout") != found.name:
-            guard = 0
+        guard = tagged_guard(metadata) if metadata.get("envconv:layout") == found.name else 0
         origin = "given by --from"
     guard >>= level + int(metadata.get("envconv:level", 0) or 0)  # a level's guard is G >> k
     try:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -10,7 +11,7 @@ import numpy as np
 from .errors import LayoutError
 from .layouts import Layout, get_layout
 
-__all__ = ["EnvMap"]
+__all__ = ["EnvMap", "map_levels"]
 
 
 @dataclass
@@ -130,3 +131,15 @@ def default_channel_names(count: int) -> tuple[str, ...]:
         return ("Y",)
     base = ("R", "G", "B", "A")
     return tuple(base[i] if i < 4 else f"channel{i}" for i in range(count))
+
+
+def map_levels(envmap: EnvMap, fn, **changes: Any) -> EnvMap:
+    """``envmap`` with ``fn`` applied to its pixels and to every MIP level it carries.
+
+    ``fn`` takes and returns an ``(H, W, C)`` array; ``changes`` are other fields to replace
+    (e.g. ``metadata``).
+    """
+    pixels = fn(envmap.pixels)
+    if envmap.levels is not None:
+        changes["levels"] = [pixels, *(fn(level) for level in envmap.levels[1:])]
+    return dataclasses.replace(envmap, pixels=pixels, **changes)

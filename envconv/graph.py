@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import inspect
 import json
+import math
 import os
 from dataclasses import dataclass, field
 from typing import Any
@@ -36,9 +37,12 @@ from . import io
 from .errors import EnvconvError, UsageError
 from .layouts import get_layout
 from .pipeline import Colorspace, Exposure, Pipeline, Read, Resample, Rotate, Step, Write
+from .prepare import FIX_MODES
 from .resample import FILTERS, convert
+from .sampling import check_guard, check_mips, check_samples
+from .steps import PREPARE_OPTIONS, check_variables
 
-__all__ = ["Graph", "load_graph", "parse_graph", "STEP_KEYS"]
+__all__ = ["Graph", "load_graph", "parse_graph", "STEP_KEYS", "CHECKS"]
 
 _TOP_KEYS = {"version", "inputs", "vars", "steps"}
 _ALIASES = {
@@ -58,12 +62,13 @@ def _signature_keys(fn, *skip: str) -> set[str]:
 def _step_keys() -> dict[str, set[str]]:
     # Derived from the library signatures, so options added there are accepted here too.
     return {
-        "read": {"path"} | _signature_keys(io.read, "path"),
+        "read": {"path"} | _signature_keys(io.read, "path") | set(PREPARE_OPTIONS),
         "rotate": {"angles", "yaw", "pitch", "roll"},
         "exposure": {"stops"},
         "colorspace": {"dst", "src", "config"},
         "resample": _signature_keys(convert, "envmap"),
-        "write": {"path", "makedirs"} | _signature_keys(io.write, "envmap", "path", "warnings"),
+        "write": {"path", "makedirs", "preview", "no_clobber"}
+        | _signature_keys(io.write, "envmap", "path", "warnings"),
     }
 
 
@@ -145,6 +150,10 @@ def parse_graph(data: Any, path: str = "<graph>", recipe: bool | None = None) ->
         isinstance(v, (str, int, float)) for v in variables.values()
     ):
         raise UsageError(f"{path}: key 'vars': expected a table of strings")
+    try:
+        check_variables(variables)
+    except UsageError as exc:
+        raise UsageError(f"{path}: key 'vars': {exc}") from None
     steps_data = data.get("steps")
     if not isinstance(steps_data, list) or not steps_data:
         raise UsageError(f"{path}: key 'steps': expected at least one [[steps]] table")
@@ -210,37 +219,117 @@ def _is_int(value: Any) -> bool:
     return isinstance(value, int) and not isinstance(value, bool)
 
 
-def _check_value(key: str, value: Any) -> str | None:
-    """A problem with ``value`` for ``key``, or None (keys not listed are passed on as they are)."""
-    number = (int, float)
-    if key in ("path", "dst", "src", "config") and not (isinstance(value, str) and value):
-        return f"expected a non-empty string, got {value!r}"
-    if key in ("to", "layout"):
-        try:
-            get_layout(value)
-        except EnvconvError as exc:
-            return str(exc)
-    if key == "size" and not (_is_int(value) and value >= 1):
-        return f"expected a positive integer, got {value!r}"
-    if key == "level" and not (_is_int(value) and value >= 0):
-        return f"expected a non-negative integer, got {value!r}"
-    if key == "samples" and value != "auto" and not (_is_int(value) and 1 <= value <= 64):
-        return f"expected 1..64 or 'auto', got {value!r}"
-    if key == "filter" and value not in FILTERS:
-        return f"expected one of {', '.join(FILTERS)}, got {value!r}"
-    if key == "guard" and value != "fill" and not (_is_int(value) and value >= 0):
-        return f"expected a non-negative integer or 'fill', got {value!r}"
-    if key in ("alpha", "makedirs") and not isinstance(value, bool):
-        return f"expected true or false, got {value!r}"
-    if key == "mips" and not (isinstance(value, bool) or (_is_int(value) and value >= 0)):
-        return f"expected true, false or a number of levels, got {value!r}"
-    if key in ("stops", "yaw", "pitch", "roll") and (
-        isinstance(value, bool) or not isinstance(value, number)
-    ):
-        return f"expected a number, got {value!r}"
-    if key in ("angles", "rotate") and not (
-        isinstance(value, str)
-        or (isinstance(value, list) and all(isinstance(v, number) for v in value))
-    ):
-        return f"expected 'YAW,PITCH,ROLL' or a list of numbers, got {value!r}"
+def _is_number(value: Any) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+
+
+def _text(value: Any) -> str | None:
+    return None if isinstance(value, str) and value else "a non-empty string"
+
+
+def _choice(*choices: str):
+    return lambda value: None if value in choices else "one of " + ", ".join(choices)
+
+
+def _layout(value: Any) -> str | None:
+    if not isinstance(value, str):
+        return "a layout name (see envconv layouts)"
+    try:
+        get_layout(value)
+    except EnvconvError as exc:
+        return f"a layout name ({exc})"
     return None
+
+
+def _convention(value: Any) -> str | None:
+    from .conventions import resolve_convention
+    from .errors import LayoutError
+    from .facesets import is_face_set
+
+    expected = "a convention name, a face set or an axis remap like '-x,z,y'"
+    if not isinstance(value, str) or not value:
+        return expected
+    if is_face_set(value):
+        return None
+    try:
+        resolve_convention(value, "latlong")
+    except LayoutError:  # a known preset of other layouts
+        return None
+    except EnvconvError as exc:
+        return f"{expected} ({exc})"
+    return None
+
+
+def _passes(check, value: Any) -> bool:
+    """Whether one of :mod:`envconv.sampling`'s checks (the one home of the rule) takes it."""
+    try:
+        check(value)
+    except EnvconvError:
+        return False
+    return True
+
+
+def _compression(value: Any) -> str | None:
+    from .io.formats import COMPRESSIONS
+
+    names = sorted({c.rstrip(":") for codecs in COMPRESSIONS.values() for c in codecs})
+    if isinstance(value, str) and value.partition(":")[0].lower() in names:
+        return None
+    return "a compression name (" + ", ".join(names) + "), optionally with :LEVEL"
+
+
+def _face_set(value: Any) -> str | None:
+    from .facesets import is_face_set
+
+    return None if is_face_set(value) else "a face set name (quake, unity-6sided, threejs, godot, unreal)"
+
+
+def _angles(value: Any) -> str | None:
+    if isinstance(value, str) or (isinstance(value, list) and len(value) == 3
+                                  and all(_is_number(v) for v in value)):  # fmt: skip
+        return None
+    return "'YAW,PITCH,ROLL' or a list of three numbers"
+
+
+def _roughness(value: Any) -> str | None:
+    if isinstance(value, str) and value or (
+        isinstance(value, list) and value and all(_is_number(v) for v in value)
+    ):
+        return None
+    return "gltf, filament, unreal, 'R1,R2,...' or a list of numbers"
+
+
+_BOOL = lambda value: None if isinstance(value, bool) else "true or false"  # noqa: E731
+_NUMBER = lambda value: None if _is_number(value) else "a finite number"  # noqa: E731
+
+#: What each key of a step takes: a function returning None, or what was expected.
+CHECKS: dict[str, Any] = {
+    "path": _text, "preview": _text, "dst": _text, "src": _text, "config": _text,
+    "ocio_config": _text, "input_colorspace": _text, "output_colorspace": _text,
+    "axes": _text, "to": _layout, "layout": _layout,
+    "size": lambda v: None if _is_int(v) and v >= 1 else "a positive integer",
+    "level": lambda v: None if _is_int(v) and v >= 0 else "a non-negative integer",
+    "part": lambda v: None if (_is_int(v) and v >= 0) or (isinstance(v, str) and v) else
+    "a part name or index",
+    "samples": lambda v: None if v == "auto" or _is_int(v) and _passes(check_samples, v) else
+    "1..64 or 'auto'",
+    "filter": _choice(*FILTERS),
+    "guard": lambda v: None if v == "fill" or _is_int(v) and _passes(check_guard, v) else
+    "a non-negative integer or 'fill'",
+    "alpha": _BOOL, "makedirs": _BOOL, "dither": _BOOL, "irradiance": _BOOL,
+    "clamp_negative": _BOOL, "no_clobber": _BOOL,
+    "mips": lambda v: None if isinstance(v, (bool, int, str)) and _passes(check_mips, v) else
+    "true, false, a number of levels, 'all', 'box[:K]' or 'ggx[:K]'",
+    "roughness": _roughness, "up": _choice("y", "z"),
+    "in_convention": _convention, "out_convention": _convention, "faces": _face_set,
+    "stops": _NUMBER, "yaw": _NUMBER, "pitch": _NUMBER, "roll": _NUMBER, "exposure": _NUMBER,
+    "angles": _angles, "rotate": _angles,
+    "bit_depth": _choice("half", "float", "uint8", "uint16"),
+    "compression": _compression, "fix_nonfinite": _choice(*FIX_MODES),
+}  # fmt: skip
+
+
+def _check_value(key: str, value: Any) -> str | None:
+    """A problem with ``value`` for ``key`` (``expected …, got …``), or None."""
+    expected = CHECKS[key](value)
+    return None if expected is None else f"expected {expected}, got {value!r}"

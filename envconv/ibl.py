@@ -141,7 +141,7 @@ def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alp
     p = _pow2(max(n_cube, min(2.0 / narrowest, 2.0 * n_cube)))
     p = min(max(p, _MIN_PYRAMID), cap or _MAX_PYRAMID)
     if to.family == FAMILY_CUBE_GL and guard == 0 and level0.shape[0] == to.rows * p:
-        from .textures import cube_faces
+        from .io.textures import cube_faces
 
         faces = np.stack(cube_faces(to, level0))
         rotation = np.eye(3)

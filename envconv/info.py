@@ -28,15 +28,6 @@ def mean_radiance(envmap: EnvMap) -> list[float]:
     return [float(v) for v in weighted / total]
 
 
-def _first_file(path: str, layout: str | None) -> str:
-    """The file whose header stands for a (possibly ``{face}``) path."""
-    if "{face}" not in path:
-        return path
-    from .face_files import find_face_files
-
-    return find_face_files(path, layout).paths[0]
-
-
 def _parts(header) -> list[dict[str, Any]]:
     skipped = dict(header.skipped)
     records = []
@@ -59,64 +50,77 @@ def _types(channels, header) -> list[str | None]:
     return [stored.get(name) for name in channels]
 
 
-def describe(path: str, layout: str | None = None, level: int = 0, part: str | None = None) -> dict[str, Any]:
+def describe(path: str, layout: str | None = None, level: int = 0, part: str | None = None,
+             stats: bool = False) -> dict[str, Any]:  # fmt: skip
     """A JSON-ready record of an image file (see the module docstring).
+
+    The record comes from the file's headers alone (:func:`envconv.io.probe`): no pixel is
+    read unless ``stats`` is true, which adds ``min``, ``max`` (per channel, finite values),
+    ``nonfinite`` (count of NaN/Inf values) and ``mean_radiance`` (None for an image no
+    layout fits), in the working space as :func:`envconv.io.read` gives the pixels.
 
     ``size`` and ``guard`` are N and G of the level read (G >> level for a MIP level), None
     for an unknown layout; ``levels`` lists [width, height] of every MIP level's display
-    window, level 0 first; windows are [x, y, width, height]. Values (``min``, ``max``,
-    ``mean_radiance``) are in the working space, as :func:`envconv.io.read` gives them.
+    window, level 0 first; windows are [x, y, width, height]. ``colorspace`` and
+    ``metadata`` are the file's as stored (of the first file of a ``{face}`` set).
 
     A layout given as ``layout`` (``--from``) that the image does not fit raises LayoutError,
     as reading does; when detection finds none, ``layout`` is ``"unknown"``.
     """
-    from .colorflow import input_colorspace_of, working_pixels
-    from .detect import find_layout
-    from .file_io import read_file_header
-    from .io import mip_levels, read, read_unplaced
+    from .color import input_colorspace_of
+    from .io import probe
 
     path = str(path)
-    header = read_file_header(_first_file(path, layout), level, part)
-    try:
-        env = read(path, layout=layout, level=level, part=part)
-    except LayoutError:
-        if layout is not None or "{face}" in path:
-            raise
-        env = None
-    if env is None:
-        pixels, channels = read_unplaced(path, level, part)
-        pixels = working_pixels(pixels, header.metadata, header.pixel_type)
-    else:
-        pixels, channels = env.pixels, env.channels
-    if layout is not None:
-        candidates, reason = (layout,), "given by --from"
-    elif "{face}" in path:
-        candidates, reason = (env.layout.name,), "{face} in the path: one file per face"
-    else:
-        candidates, reason = find_layout(header.width, header.height, header.metadata, pixels)[2:]
-    finite = np.isfinite(pixels)
-    metadata = header.metadata if "{face}" not in path else env.metadata
-    return {
+    found = probe(path, layout, level, part)
+    header = found.header
+    record = {
         "path": path,
-        "layout": env.layout.name if env is not None else "unknown",
-        "candidates": list(candidates),
-        "reason": reason,
-        "size": env.size if env is not None else None,
-        "guard": env.guard if env is not None else None,
-        "width": int(pixels.shape[1]),
-        "height": int(pixels.shape[0]),
+        "layout": found.layout.name if found.layout is not None else "unknown",
+        "candidates": list(found.candidates),
+        "reason": found.reason,
+        "size": found.size,
+        "guard": found.guard,
+        "width": found.width,
+        "height": found.height,
         "display_window": list(header.display),
         "data_window": list(header.data),
         "level": level,
-        "levels": [list(size) for size in mip_levels(path, part)],
-        "channels": list(channels),
-        "channel_types": _types(channels, header),
+        "levels": [list(size) for size in found.levels],
+        "channels": list(found.channels),
+        "channel_types": _types(found.channels, header),
         "pixel_type": header.pixel_type,
         "parts": _parts(header),
         "colorspace": input_colorspace_of(header.metadata, header.pixel_type),  # the file's
-        "min": [float(pixels[..., c][finite[..., c]].min(initial=np.inf)) for c in range(pixels.shape[2])],
-        "max": [float(pixels[..., c][finite[..., c]].max(initial=-np.inf)) for c in range(pixels.shape[2])],
+        "metadata": {k: (v if isinstance(v, (int, float, str)) else list(v))
+                     for k, v in header.metadata.items()},
+    }  # fmt: skip
+    if stats:
+        record.update(_stats(path, found, layout, level, part))
+    return record
+
+
+def _stats(path: str, found, layout: str | None, level: int, part: str | None) -> dict[str, Any]:
+    """Range, non-finite count and mean radiance of the pixels, read in the working space."""
+    from .color import working_pixels
+    from .io import read, read_unplaced
+
+    env = None
+    if found.layout is not None:
+        try:
+            env = read(path, layout=layout, level=level, part=part)
+        except LayoutError:  # a 2:1 image black outside two disks: latlong or paraboloid
+            if layout is not None or "{face}" in path:
+                raise
+    if env is not None:
+        pixels = env.pixels
+    else:
+        pixels, _ = read_unplaced(path, level, part)
+        pixels = working_pixels(pixels, found.metadata, found.pixel_type)
+    finite = np.isfinite(pixels)
+    channels = range(pixels.shape[2])
+    return {
+        "min": [float(pixels[..., c][finite[..., c]].min(initial=np.inf)) for c in channels],
+        "max": [float(pixels[..., c][finite[..., c]].max(initial=-np.inf)) for c in channels],
         "nonfinite": int((~finite).sum()),
         "mean_radiance": mean_radiance(env) if env is not None else None,
-        "metadata": {k: (v if isinstance(v, (int, float, str)) else list(v)) for k, v in metadata.items()},
-    }  # fmt: skip
+    }

@@ -91,11 +91,17 @@ def watch_progress(watcher: Callable[[int, int], None] | None):
     return previous
 
 
-def _run_watched(call, total: int) -> None:
-    """Run ``call(progress)`` on a helper thread, reporting ``progress[0]`` to the watcher."""
-    watcher = _watcher
-    if watcher is None:
-        call(None)
+def _run_watched(call, total: int, watch: bool = True) -> None:
+    """Run ``call(progress)`` on a helper thread, reporting ``progress[0]`` to the watcher.
+
+    The calling thread waits in short steps, so a signal (SIGINT, SIGTERM: an exception in
+    the main thread, see :mod:`envconv.interrupt`) is seen at once: the kernel is then
+    cancelled between bands of rows (``_core.cancel``) and the exception goes on. ``watch``
+    False: no progress to report (the call takes no counter).
+    """
+    watcher = _watcher if watch else None
+    if watcher is None and threading.current_thread() is not threading.main_thread():
+        call(None)  # signals reach the main thread only: nothing to wait for here
         return
     progress = np.zeros(1, np.int64)
     failure: list[BaseException] = []
@@ -108,15 +114,20 @@ def _run_watched(call, total: int) -> None:
 
     worker = threading.Thread(target=work, name="envconv-kernel", daemon=True)
     worker.start()
-    while worker.is_alive():
-        worker.join(0.2)
-        if worker.is_alive():
-            watcher(int(progress[0]), total)
+    try:
+        while worker.is_alive():
+            worker.join(0.2 if watcher is not None else 0.05)
+            if watcher is not None and worker.is_alive():
+                watcher(int(progress[0]), total)
+    except BaseException:
+        _core.cancel(True)
+        worker.join()
+        _core.cancel(False)
+        raise
     if failure:
         raise failure[0]
-    watcher(int(progress[0]), total)  # the end, however fast the kernel was
-
-
+    if watcher is not None:
+        watcher(int(progress[0]), total)  # the end, however fast the kernel was
 def _c(array, dtype) -> np.ndarray:
     return np.ascontiguousarray(array, dtype)
 
@@ -128,12 +139,12 @@ def _geo(geometry):
 
 def resample_rows(
     src, rip, rip_levels, rip_rows, sgeometry, dgeometry, scale_x, scale_y, samples, filt, rot,
-    fill, out, alpha=None, weights=None, zeroed=False,
+    fill, out, alpha=None, weights=None, zeroed=False, coverage_channel=False,
 ):  # fmt: skip
     """Fill ``out`` (H, W, C float32) with ``src`` resampled; see :mod:`envconv.resample`.
 
     ``alpha`` (H, W float32), when given, receives each pixel's valid-region coverage;
-    ``weights`` (H, W float64) each pixel's sum of sub-sample weights (the solid-angle density
+    ``weights`` (H, W float32) each pixel's sum of sub-sample weights (the solid-angle density
     of its readable sub-samples), from which the mip chain averages blocks with exactly the
     weights used here. ``rip`` holds ``rip_levels`` rip-map levels of a lat-long source
     (:func:`build_rips`), filled in the ``rip_rows`` rows next to each pole; they are read only
@@ -141,7 +152,9 @@ def resample_rows(
     output directions to source directions; ``scale_x``, ``scale_y`` are level-0 output pixels
     per pixel of ``out`` (1 for level 0 of a mip chain). ``zeroed``: the arrays already hold
     zeros (``np.zeros``), so pixels in a layout's empty cells are left as they are: their
-    memory is never touched (half of a cross).
+    memory is never touched (half of a cross). ``coverage_channel``: ``out`` has one channel
+    more than ``src`` and its last channel receives the coverage (an alpha channel resampled in
+    place, with no second array; ``alpha`` must then be None).
     """
     args = (
         _c(src, np.float32), _c(rip, np.float32), int(rip_levels), int(rip_rows),
@@ -149,7 +162,8 @@ def resample_rows(
         int(filt), _c(rot, np.float64), bool(fill), out, alpha, weights, _threads,
     )  # fmt: skip
     bands = (out.shape[0] + TILE - 1) // TILE
-    _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed)), bands)
+    _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed),
+                                                 bool(coverage_channel)), bands)  # fmt: skip
 
 
 def rip_level_count(width: int) -> int:
@@ -192,9 +206,11 @@ def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None 
 
 def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout) -> None:
     """Weighted means of bx × by blocks of ``src`` with weights ``wsrc``: ``out`` (h, w, C),
-    the blocks' weight sums ``wout`` and mean coverages ``aout``."""
+    the blocks' weight sums ``wout`` and mean coverages ``aout`` (``asrc`` and ``aout`` both
+    None: no coverage)."""
     _core.reduce_blocks(
-        _c(src, np.float32), _c(wsrc, np.float64), _c(asrc, np.float32), int(bx), int(by), out,
+        _c(src, np.float32), _c(wsrc, np.float32), None if asrc is None else _c(asrc, np.float32),
+        int(bx), int(by), out,
         wout, aout, _threads,
     )  # fmt: skip
 
@@ -310,10 +326,11 @@ def ibl_prefilter(pyramid, p, nch, geometry, scale_x, scale_y, alpha, samples, r
     """Fill ``out`` (H, W, C) with the environment under the GGX lobe of roughness ``alpha``
     (α = r²; α = 1 with the clamped cosine: irradiance / π), read from ``pyramid``
     (:func:`ibl_pyramid` of a p-cube); ``tau`` bounds the expansion step (src/core/ibl.h)."""
-    _core.ibl_prefilter(
+    args = (
         pyramid, int(p), int(nch), *_geo(geometry), float(scale_x), float(scale_y), float(alpha),
         int(samples), _c(rot, np.float64), bool(fill), float(tau), out, _threads,
     )  # fmt: skip
+    _run_watched(lambda _: _core.ibl_prefilter(*args), 0, watch=False)
 
 
 def sh_project(pixels, geometry, samples: int, sign_x: float) -> np.ndarray:

@@ -98,12 +98,13 @@ def mip_sizes(
     return [(mx * max(fw >> k, 1), my * max(fh >> k, 1)) for k in range(count)]
 
 
-def _run_direct(source, sgeo, rot, dgeo_all, fill, shape, scale, samples, filt):
-    """Resample one level directly: (pixels (H, W, C), coverage (H, W), weights (H, W))."""
+def _run_direct(source, sgeo, rot, dgeo_all, fill, shape, scale, samples, filt, coverage=True):
+    """Resample one level directly: (pixels (H, W, C), coverage (H, W) or None without
+    ``coverage``, weights (H, W))."""
     height, width = shape
     out = np.empty((height, width, source.shape[2]), np.float32)
-    coverage = np.empty((height, width), np.float32)
-    weights = np.empty((height, width), np.float64)
+    coverage = np.empty((height, width), np.float32) if coverage else None
+    weights = np.empty((height, width), np.float32)
     source = np.ascontiguousarray(source)
     no_rips = np.zeros((1, 1, source.shape[2]), np.float32)  # mips use one fixed S
     kernels.resample_rows(
@@ -129,6 +130,8 @@ def build_chain(
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """Levels 0 … count-1 as (pixels (H_k, W_k, C) float32, coverage (H_k, W_k) float32).
 
+    ``coverage0`` None: no level's coverage is made (every coverage is None), which saves a
+    plane per level when no alpha channel is wanted.
     ``level0``, ``coverage0`` and ``weights0`` (each pixel's sum of sub-sample weights) are the
     resampler's output for level 0, made with ``samples`` sub-samples per edge, ``filt`` and
     the output→source rotation ``rot``; see the module docstring for how the other levels are
@@ -145,8 +148,8 @@ def build_chain(
             src, cov, wts = levels[j]
             bx, by = sizes[j][0] // wk, sizes[j][1] // hk
             out = np.empty((hk, wk, src.shape[2]), np.float32)
-            cov_k = np.empty((hk, wk), np.float32)
-            wts_k = np.empty((hk, wk), np.float64)
+            cov_k = None if cov is None else np.empty((hk, wk), np.float32)
+            wts_k = np.empty((hk, wk), np.float32)
             kernels.reduce_blocks(src, wts, cov, bx, by, out, wts_k, cov_k)
             levels.append((out, cov_k, wts_k))
             continue
@@ -162,6 +165,7 @@ def _fallback_level(source, to, size, guard, fill, samples, filt, rot, sizes, le
     w0, h0 = sizes[0]
     scale = (w0 / wk, h0 / hk)
     dgeo_all = kernel_geometry(to, size, guard)
+    cover = levels[0][1] is not None
     for j in range(k - 1, 0, -1):
         step = 1 << j
         wj, hj = sizes[j]
@@ -172,12 +176,13 @@ def _fallback_level(source, to, size, guard, fill, samples, filt, rot, sizes, le
             s_k = min(max(math.ceil(2 * max(wj / wk, hj / hk)), 1), MAX_LEVEL_SAMPLES)
             log.debug("mip level %d: %dx%d from level %d, S=%d", k, wk, hk, j, s_k)
             return _run_direct(
-                finer.pixels, sgeo, np.eye(3), dgeo_all, fill, (hk, wk), scale, s_k, filt
+                finer.pixels, sgeo, np.eye(3), dgeo_all, fill, (hk, wk), scale, s_k, filt, cover
             )
     s_k = min(max(round(samples * math.sqrt(scale[0] * scale[1])), 1), MAX_LEVEL_SAMPLES)
     log.debug("mip level %d: %dx%d from the source, S=%d", k, wk, hk, s_k)
     sgeo = kernel_geometry(source.layout, source.size, source.guard)
-    return _run_direct(source.pixels, sgeo, rot, dgeo_all, fill, (hk, wk), scale, s_k, filt)
+    return _run_direct(source.pixels, sgeo, rot, dgeo_all, fill, (hk, wk), scale, s_k, filt,
+                       cover)  # fmt: skip
 
 
 def convert_level(

@@ -15,7 +15,8 @@
 4. Rounded to uint8.
 
 **Contact sheet** (:func:`contact_sheet`): the map in its own layout; six 90° perspective
-views along the world axes of envconv's frame (right-handed, +Y up: OpenEXR/USD), each an
+views along the world axes of envconv's frame (right-handed, +Y up: OpenEXR/USD) or, with
+``convention``, of that tool's frame (Blender's "+Z" is envconv's +Y), each an
 unmirrored view from the centre, taken from the cube faces of ``envconv.convert``; a mirror
 ball (layout ``sphere``: an orthographic camera looking along −Z at a mirror ball); a diffuse
 ball (the same camera looking at a white Lambertian ball, lit by the map's irradiance); a line
@@ -34,7 +35,7 @@ from .font import draw_text, text_width
 from .geometry import dir_to_uv, pixel_directions, pixel_solid_angles
 
 __all__ = ["MID_GREY", "WORK_HEIGHT", "VIEW_FACES", "auto_exposure", "tone_map", "checkerboard",
-           "working_map", "perspective_views", "mirror_ball", "diffuse_ball", "map_stats",
+           "working_map", "view_axes", "perspective_views", "mirror_ball", "diffuse_ball", "map_stats",
            "contact_sheet", "preview_picture"]  # fmt: skip
 
 log = logging.getLogger(__name__)
@@ -103,25 +104,61 @@ def tone_map(pixels, channels=None, exposure: float = 0.0, auto: bool = True,
     return np.round(shown * 255.0).astype(np.uint8)
 
 
-def working_map(envmap: EnvMap, in_convention=None) -> EnvMap:
-    """The map as a lat-long of height :data:`WORK_HEIGHT` (or less), in envconv's frame."""
+def working_map(envmap: EnvMap, in_convention=None, height: int = WORK_HEIGHT) -> EnvMap:
+    """The map as a lat-long of ``height`` (default :data:`WORK_HEIGHT`; less for a smaller
+    map), in envconv's frame.
+
+    A lat-long more than four times that high is first box-averaged by an integer factor to
+    at least twice that height (a k × k block of a lat-long is a lat-long pixel, its mean the
+    area mean up to the cos(latitude) weighting within k rows), which a 16K map reaches in a
+    fraction of the time the resampler's pyramid of the full map takes.
+    """
     from .resample import convert
     from .sampling import default_size
 
-    size = min(WORK_HEIGHT, default_size(envmap, "latlong"))
+    size = min(height, default_size(envmap, "latlong"))
+    rows = envmap.pixels.shape[0]
+    plain = envmap.layout.name == "latlong" and envmap.guard == 0 and envmap.valid is None
+    if plain and rows > 4 * size:
+        step = rows // (2 * size)
+        if envmap.pixels.shape[1] == 2 * rows and rows % step == 0:
+            envmap = EnvMap(_box_average(envmap.pixels, step), envmap.layout,
+                            channels=envmap.channels, metadata=envmap.metadata)  # fmt: skip
     return convert(envmap, "latlong", size=size, in_convention=in_convention)
 
 
-def perspective_views(work: EnvMap, size: int = 256) -> dict[str, np.ndarray]:
+def view_axes(convention=None) -> dict[str, str]:
+    """Axis of a tool's world frame ("+X" … "-Z") → the axis of envconv's frame it is.
+
+    ``convention`` is a preset name or an AXES frame (:func:`envconv.conventions.world_frame`);
+    e.g. Blender (Z-up right-handed) gives {"+Z": "+Y", "+Y": "-Z", …}.
+    """
+    from .conventions import world_frame
+
+    frame, _ = world_frame(convention)
+    out = {}
+    for axis in VIEW_FACES:
+        e = np.zeros(3)
+        e["XYZ".index(axis[1])] = 1.0 if axis[0] == "+" else -1.0
+        d = frame @ e
+        k = int(np.argmax(np.abs(d)))
+        out[axis] = ("+" if d[k] > 0 else "-") + "XYZ"[k]
+    return out
+
+
+def perspective_views(work: EnvMap, size: int = 256, convention=None) -> dict[str, np.ndarray]:
     """Six 90° perspective views (size, size, C) from the centre, keyed "+X" … "-Z".
 
     Each is the unmirrored picture a camera at the centre sees looking along the world axis
-    (up +Y for the four horizon views, −Z for "+Y", +Z for "-Y").
+    (in envconv's frame: up +Y for the four horizon views, −Z for "+Y", +Z for "-Y"). With a
+    ``convention`` the keys are the axes of that tool's world frame (:func:`view_axes`): the
+    view keyed "+Z" for Blender is envconv's "+Y" view.
     """
     from .resample import convert
 
     cube = convert(work, "cube-faces", size=size).pixels
-    return {axis: cube[:, size * k : size * (k + 1)] for axis, k in VIEW_FACES.items()}
+    ours = {axis: cube[:, size * k : size * (k + 1)] for axis, k in VIEW_FACES.items()}
+    return {axis: ours[envconv_axis] for axis, envconv_axis in view_axes(convention).items()}
 
 
 def mirror_ball(work: EnvMap, size: int = 256) -> EnvMap:
@@ -137,6 +174,8 @@ def diffuse_ball(work: EnvMap, size: int = 256) -> np.ndarray:
     A pixel of normal n shows the irradiance E(n)/π (envconv's ``irradiance=True``, a 32-high
     lat-long read bilinearly); alpha is 1 on the disk, 0 outside.
     """
+    from . import kernels
+    from .geometry import kernel_geometry
     from .resample import convert
 
     irr = convert(work, "latlong", size=32, irradiance=True)
@@ -147,28 +186,32 @@ def diffuse_ball(work: EnvMap, size: int = 256) -> np.ndarray:
     u, v = dir_to_uv("latlong", normals, 32)
     rgb, _ = _rgb_alpha(irr.pixels, irr.channels)
     h, w = rgb.shape[:2]
-    fx, fy = u * w - 0.5, np.clip(v * h - 0.5, 0.0, h - 1.0)
-    x0, y0 = np.floor(fx).astype(int), np.minimum(np.floor(fy).astype(int), h - 2)
-    tx, ty = (fx - x0)[..., None], (fy - y0)[..., None]
-    x0, x1 = x0 % w, (x0 + 1) % w  # the lat-long wraps in u
-    top = rgb[y0, x0] * (1 - tx) + rgb[y0, x1] * tx
-    bottom = rgb[y0 + 1, x0] * (1 - tx) + rgb[y0 + 1, x1] * tx
+    points = np.stack([u * w, v * h], axis=-1).reshape(-1, 2)  # image points, pixel units
+    # The core's seam-aware bilinear tap (wraps in u, continues over the poles).
+    shade = kernels.filtered_reads(rgb, kernel_geometry("latlong", 32), [0], points,
+                                   kernels.FILTER_BILINEAR)  # fmt: skip
     out = np.zeros((size, size, 4), np.float32)
-    out[..., :3] = top * (1 - ty) + bottom * ty
+    out[..., :3] = shade.reshape(size, size, 3)
     out[..., 3] = r2 <= 1.0
     return out
 
 
 def _range_and_nans(envmap: EnvMap) -> tuple[float, float, int]:
     """(min, max) of the finite colour values and the NaN count of every channel, read in
-    bands of rows so a 16K map needs no full-size temporary."""
+    bands of rows so a 16K map needs no full-size temporary. A band whose min and max are
+    finite has neither NaN nor Inf (both propagate or are extreme), so it takes two passes."""
     names = [c.upper() for c in envmap.channels] or ["R", "G", "B"]
     cols = [k for k, c in enumerate(names) if c != "A"][:3] or [0]
+    every = cols == list(range(envmap.pixels.shape[2]))
     lo, hi, nans = np.inf, -np.inf, 0
     for start in range(0, envmap.pixels.shape[0], 256):
         band = envmap.pixels[start : start + 256]
+        rgb = band if every else band[..., cols]
+        b_lo, b_hi = float(rgb.min()), float(rgb.max())
+        if every and np.isfinite(b_lo) and np.isfinite(b_hi):
+            lo, hi = min(lo, b_lo), max(hi, b_hi)
+            continue
         nans += int(np.count_nonzero(np.isnan(band)))
-        rgb = band[..., cols]
         finite = np.isfinite(rgb)
         values = rgb if finite.all() else rgb[finite]
         if values.size:
@@ -206,27 +249,41 @@ def _stats_line(s: dict) -> str:
             f"  NaN {s['nan']}  mean ({mean})  brightest ({d[0]:+.2f},{d[1]:+.2f},{d[2]:+.2f})")  # fmt: skip
 
 
-def _thumbnail(envmap: EnvMap, max_width: int) -> np.ndarray:
-    """The map's own pixels, box-averaged by an integer factor to at most ``max_width``
-    (in bands of rows, so a 16K map needs no full-size temporary)."""
-    step = max(1, -(-envmap.pixels.shape[1] // max_width))
-    h, w = (np.array(envmap.pixels.shape[:2]) // step) * step
-    band = step * max(1, 64 // step)
+def _box_average(pixels: np.ndarray, step: int) -> np.ndarray:
+    """(H // step, W // step, C) means of step × step blocks (trailing rows and columns
+    dropped), in bands of rows so a 16K map needs no full-size temporary: rows are summed
+    first, adding whole contiguous rows, then the columns of the step times smaller result."""
+    h, w = (np.array(pixels.shape[:2]) // step) * step
+    c = pixels.shape[2]
+    band = step * max(1, 256 // step)
     out = []
     for start in range(0, h, band):
-        px = envmap.pixels[start : min(start + band, h), :w]
+        px = pixels[start : min(start + band, h), :w]
         rows = px.shape[0] // step
-        out.append(px.reshape(rows, step, w // step, step, -1).mean(axis=(1, 3), dtype=np.float32))
+        acc = px.reshape(rows, step, w * c).sum(axis=1, dtype=np.float64)
+        cols = acc.reshape(rows, w // step, step, c)
+        total = cols[:, :, 0].copy()
+        for k in range(1, step):  # faster than a reduction over the short middle axis
+            total += cols[:, :, k]
+        out.append((total / (step * step)).astype(np.float32))
     return np.concatenate(out, axis=0)
 
 
+def _thumbnail(envmap: EnvMap, max_width: int) -> np.ndarray:
+    """The map's own pixels, box-averaged by an integer factor to at most ``max_width``."""
+    return _box_average(envmap.pixels, max(1, -(-envmap.pixels.shape[1] // max_width)))
+
+
 def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
-                  in_convention=None, cell: int = 192) -> np.ndarray:  # fmt: skip
+                  in_convention=None, cell: int = 192, convention=None) -> np.ndarray:  # fmt: skip
     """(H, W, 3) uint8 labelled contact sheet of ``envmap`` (see the module docstring).
 
     One exposure (automatic, from the working lat-long's solid-angle-weighted log-average,
-    plus ``exposure``) is used for every panel, so panels compare.
+    plus ``exposure``) is used for every panel, so panels compare. ``convention`` (a preset
+    name or an AXES frame) shows and labels the six views in that tool's world axes.
     """
+    from .conventions import world_frame
+
     work = working_map(envmap, in_convention)
     wrgb, _ = _rgb_alpha(work.pixels, work.channels)
     stops = exposure + auto_exposure(wrgb, pixel_solid_angles("latlong", work.size))
@@ -234,7 +291,8 @@ def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
     width = 6 * cell + 7 * pad
     thumb = _thumbnail(envmap, width - 2 * pad)
     thumb_h = thumb.shape[0]
-    views = perspective_views(work, cell)
+    views = perspective_views(work, cell, convention)
+    frame_name = world_frame(convention)[1].upper()
     balls = [("MIRROR BALL", mirror_ball(work, cell).pixels, ("R", "G", "B", "A")),
              ("DIFFUSE BALL", diffuse_ball(work, cell), ("R", "G", "B", "A"))]  # fmt: skip
     height = pad + label + thumb_h + 2 * (pad + label + cell) + pad + label + pad
@@ -247,7 +305,8 @@ def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
             img, names, stops, auto=False, view=view)
 
     own_names = envmap.channels or None
-    place(thumb, own_names, pad, pad, f"{envmap.layout.name.upper()} (AS STORED)")
+    place(thumb, own_names, pad, pad, f"{envmap.layout.name.upper()} (AS STORED)"
+          f"   VIEWS IN {frame_name} AXES")  # fmt: skip
     y = pad + label + thumb_h + pad
     for k, (axis, img) in enumerate(views.items()):
         place(img, work.channels, pad + k * (cell + pad), y, axis)

@@ -24,7 +24,9 @@ samples="auto"
     With the bilinear filter a lat-long source is read through a horizontal rip-map where a
     pixel spans at least 8 × 2^k texels along x (its polar rows), and sub-samples are counted
     in that level's texels (see :func:`envconv.kernels.build_rips` and ``RIP_MIN_SPAN`` in
-    :mod:`envconv.kernels`).
+    :mod:`envconv.kernels`). The rip-map is filled only in the rows next to each pole, at most
+    a fifth of the source's bytes (:func:`rip_row_cap`, for the memory bound of
+    docs/memory.md); elsewhere level 0 is read with up to 32 sub-samples per edge.
     A same-grid conversion (same layout, size and guard, no rotation) copies pixels exactly.
     With ``mips`` the whole chain uses one S, ``clamp(round(r), 1, 32)`` with ``r`` the ratio
     of output to source pixel pitch on the horizon, so that every level is the exact block
@@ -55,11 +57,13 @@ from .sampling import (
     MAX_SAMPLES,
     auto_samples,
     check_guard,
+    check_mips,
     check_samples,
     default_size,
 )
 
-__all__ = ["convert", "default_size", "auto_samples", "source_rips", "FILTERS", "MAX_SAMPLES"]
+__all__ = ["convert", "default_size", "auto_samples", "source_rips", "rip_row_cap",
+           "memory_needed", "FILTERS", "MAX_SAMPLES"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -137,6 +141,7 @@ def convert(
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
+    _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
     if envmap.valid is not None or envmap.parts:
         from .sourcemap import convert_with_holes
 
@@ -184,8 +189,10 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     channels = list(envmap.channels)
     src = envmap.pixels
     alpha_index = envmap.alpha_index
+    # An appended alpha channel of a single level is the kernel's coverage, written in place.
+    direct_alpha = alpha and alpha_index is None and not (mips or ggx or irradiance)
     # Zeroed (np.zeros maps fresh pages lazily): the kernel then never touches the empty cells.
-    out = np.zeros((height, width, src.shape[2]), np.float32)
+    out = np.zeros((height, width, src.shape[2] + int(direct_alpha)), np.float32)
     same_grid = (
         to.name == envmap.layout.name
         and size == envmap.size
@@ -193,9 +200,14 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
         and n_samples in (None, 1)
         and np.array_equal(rot, np.eye(3))
     )
-    # The coverage is kept for an alpha channel, the mip chain and the same-grid copy below.
-    needs_coverage = alpha or mips or same_grid
-    coverage = np.zeros((height, width), np.float32) if needs_coverage else None
+    # The coverage is kept for an alpha channel, the GGX and irradiance chains and the
+    # same-grid copy below (a plain chain needs only the weights).
+    needs_coverage = alpha or same_grid or (mips and (ggx or irradiance))
+    coverage = None
+    if direct_alpha:
+        coverage = out[:, :, -1]
+    elif needs_coverage:
+        coverage = np.zeros((height, width), np.float32)
     sgeo = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
     dgeo = kernel_geometry(to, size, guard_px)
     log.debug(
@@ -207,17 +219,21 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
         filter,
     )
     src = np.ascontiguousarray(src)
-    rip, rip_levels, rip_row_count = source_rips(envmap, src, n_samples, filter, to, size)
+    # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
+    rip, rip_levels, rip_row_count = source_rips(envmap, src, 1 if same_grid else n_samples,
+                                                 filter, to, size)  # fmt: skip
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
-    weights = np.zeros((height, width), np.float64) if mips else None
+    weights = np.zeros((height, width), np.float32) if mips else None
     kernels.resample_rows(
         src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
-        FILTERS[filter], rot, fill, out, coverage, weights, zeroed=True,
+        FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
+        zeroed=True, coverage_channel=direct_alpha,
     )  # fmt: skip
+    del rip
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
         # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
-        np.copyto(out, src, where=coverage[:, :, None] > 0)
+        _copy_covered(out, src, coverage)
     chain = [(out, coverage)]
     if mips:
         from .mips import build_chain, level_count
@@ -237,7 +253,9 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
             chain, rough = ibl.ggx_levels(envmap, to, size, guard_px, fill, rot, chain, roughness)
             metadata["envconv:roughness"] = " ".join(f"{r:.6g}" for r in rough)
     if alpha:
-        if alpha_index is None:
+        if direct_alpha:
+            channels.append("A")
+        elif alpha_index is None:
             chain = [(np.concatenate([o, c[:, :, None]], axis=2), c) for o, c in chain]
             channels.append("A")
         else:
@@ -257,19 +275,61 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     )
 
 
+def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False,
+                  samples="auto", filter="bilinear", out_convention=None) -> int | None:  # fmt: skip
+    """Estimated peak bytes of :func:`convert` with these arguments and of writing its result
+    (:func:`envconv.memory.estimate_convert`); None for arguments :func:`convert` refuses."""
+    from . import memory
+
+    try:
+        layout = get_layout(to)
+        chain, _ = _mip_filter(mips)
+        if size is None:
+            size = default_size(envmap, layout, resolve_convention(out_convention, layout))
+        guard_px = 0 if guard == "fill" else check_guard(guard)
+    except (UsageError, LayoutError, ValueError, TypeError):
+        return None
+    if not isinstance(size, (int, np.integer)) or size < 1:
+        return None
+    rips = 0
+    if check_samples(samples) is None and filter == "bilinear" and envmap.layout.name == "latlong" \
+            and not envmap.guard:  # fmt: skip
+        height, width, nch = envmap.pixels.shape
+        levels = kernels.rip_level_count(width)
+        rows = rip_rows(width, height, layout, int(size)) if levels else 0
+        rows = min(height, 2 * min(rows, rip_row_cap(width, height)))
+        rips = rows * (width - (width >> levels)) * (nch + int(envmap.valid is not None)) * 4
+    return memory.estimate_convert(envmap, layout, int(size), guard_px, chain, alpha, rips)
+
+
+def _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention):
+    """Refuse, before allocating, a conversion whose estimated peak memory exceeds what is
+    available (:mod:`envconv.memory`); bad arguments are left for :func:`_resample` to name."""
+    from . import memory
+
+    try:
+        need = memory_needed(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
+    except (UsageError, LayoutError):
+        return
+    if need is not None:
+        name = get_layout(to).name
+        memory.check(need, f"converting to {name} at size {size or 'default'}",
+                     envmap.pixels.nbytes, "lower --size, or free memory")  # fmt: skip
+
+
+def _copy_covered(out: np.ndarray, src: np.ndarray, coverage: np.ndarray) -> None:
+    """Copy ``src`` into the first channels of ``out`` where ``coverage`` > 0, a block of rows
+    at a time (the mask of a whole map would be one more plane in memory)."""
+    nch = src.shape[2]
+    rows = max(1, (1 << 20) // max(1, out.shape[1]))
+    for y0 in range(0, out.shape[0], rows):
+        block = slice(y0, y0 + rows)
+        np.copyto(out[block, :, :nch], src[block], where=coverage[block, :, None] > 0)
+
+
 def _mip_filter(mips):
     """(mips for the chain builder, True for GGX) of ``convert``'s ``mips``."""
-    if isinstance(mips, str):
-        name, _, count = mips.partition(":")
-        if name == "box":
-            return (int(count) if count else True), False
-        if name != "ggx":
-            raise UsageError(f"mips must be a number of levels, 'box' or 'ggx', got {mips!r}")
-        try:
-            return (int(count) if count else True), True
-        except ValueError:
-            raise UsageError(f"expected ggx:K with K a number of levels, got {mips!r}") from None
-    return mips, False
+    return check_mips(mips)
 
 
 def source_rips(
@@ -293,11 +353,30 @@ def source_rips(
         and envmap.layout.name == "latlong"
         and not envmap.guard
     ):
-        height = src.shape[0]
-        rows = height if to is None or size is None else rip_rows(src.shape[1], height, to, size)
+        height, width = src.shape[:2]
+        rows = height if to is None or size is None else rip_rows(width, height, to, size)
+        rows = min(rows, rip_row_cap(width, height))
         rip, levels = kernels.build_rips(src, rows)
         return rip, levels, rows
     return np.zeros((1, 1, src.shape[2]), np.float32), 0, 0
+
+
+#: Largest share of the source's bytes the rip-map may hold (issue 15's memory bound, peak
+#: ≤ 1.25 × (input + output), leaves less than a quarter of the input for it when the output
+#: is small, and the kernel's buffers need some of that).
+RIP_SHARE = 0.2
+
+
+def rip_row_cap(width: int, height: int) -> int:
+    """Most rows next to each pole a ``width`` × ``height`` lat-long's rip-map may fill: the
+    filled rows hold at most RIP_SHARE of the source (about the rows within 18° of the
+    poles, where a pixel spans the most texels). Nearer the horizon the kernel reads level 0
+    with up to MAX_SAMPLES sub-samples per edge, as it does with the other filters."""
+    levels = kernels.rip_level_count(width)
+    if levels == 0:
+        return 0
+    packed = width - (width >> levels)
+    return max(1, int(RIP_SHARE * height * width / (2 * packed)))
 
 
 #: Output pitch is estimated from √Ω, which understates an anisotropic pixel's longer edge.

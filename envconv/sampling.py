@@ -1,5 +1,6 @@
 """The rules a resample's options follow: the default output size, the automatic sub-sample
-count of a mip chain, the filters, and the checks of ``samples`` and ``guard``.
+count of a mip chain, the filters, and the checks of ``samples``, ``guard`` and ``mips`` (the
+one home of those checks: the library, the command line and graph files all call them).
 
 Shared by :mod:`envconv.resample` and :mod:`envconv.mips` (which neither imports the other for
 them). Sizes are characteristic sizes N; pitches are those of :func:`envconv.geometry.horizon_pitch`.
@@ -8,6 +9,7 @@ them). Sizes are characteristic sizes N; pitches are those of :func:`envconv.geo
 from __future__ import annotations
 
 import math
+import numbers
 
 from .conventions import resolve_convention
 from .envmap import EnvMap
@@ -15,7 +17,8 @@ from .errors import UsageError
 from .geometry import horizon_pitch
 from .layouts import Layout, get_layout
 
-__all__ = ["FILTERS", "MAX_SAMPLES", "default_size", "auto_samples", "check_samples", "check_guard"]
+__all__ = ["FILTERS", "MAX_SAMPLES", "default_size", "auto_samples", "check_samples", "check_guard",
+           "check_mips"]  # fmt: skip
 
 #: Reconstruction filters by name → kernel code.
 FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
@@ -62,3 +65,27 @@ def check_guard(guard) -> int:
     if value < 0 or (isinstance(guard, float) and not math.isclose(guard, value)):
         raise UsageError(f"guard must be a non-negative integer or 'fill', got {guard!r}")
     return value
+
+
+def check_mips(mips) -> tuple[bool | int | None, bool]:
+    """(levels, ggx) of a ``mips`` request, or UsageError.
+
+    ``levels``: None (no chain) for None or False; True (every level down to 1 × 1) for True,
+    0, ``"all"``, ``"box"`` and ``"ggx"``; K for K ≥ 1, ``"box:K"`` and ``"ggx:K"``. ``ggx`` is
+    True for the GGX-prefiltered chain (``"ggx[:K]"``), False for the box chain.
+    """
+    if mips is None or mips is False:
+        return None, False
+    if mips is True:
+        return True, False
+    if isinstance(mips, str):
+        name, colon, count = mips.partition(":")
+        if name == "all" and not colon:
+            return True, False
+        if name in ("box", "ggx") and (not colon or (count.isdigit() and int(count) >= 1)):
+            return (int(count) if colon else True), name == "ggx"
+        raise UsageError(f"mips must be a number of levels, 'all', 'box[:K]' or 'ggx[:K]' "
+                         f"(K >= 1), got {mips!r}")  # fmt: skip
+    if isinstance(mips, numbers.Integral) and mips >= 0:
+        return (True if mips == 0 else int(mips)), False
+    raise UsageError(f"mips must be True or a number of levels, got {mips!r}")

@@ -5,8 +5,13 @@ the map, its irradiance and the display transforms are embedded in it as JSON.
 
 - **Map**: the input resampled to envconv's lat-long (envconv's frame, CONVENTIONS.md), at
   most ``CAP_HEIGHT`` × 2·``CAP_HEIGHT`` (2048 × 1024), as Radiance RGBE bytes in base64
-  (negative and non-finite values become 0). **Irradiance**: a 32 × 64 lat-long of E/π
-  (``irradiance=True``), lighting the rough ball.
+  (negative and non-finite values become 0); :func:`envconv.preview.working_map` makes it, so a
+  lat-long over four times the cap is box-averaged by an integer factor first. **Irradiance**: a 32 × 64 lat-long of E/π
+  (``irradiance=True``), lighting the diffuse ball. **GGX levels**: the split-sum GGX
+  prefilter of :mod:`envconv.ibl` at the perceptual roughness of ``GGX_LEVELS`` (α = r²), each
+  a small lat-long (``mips="ggx:2"`` level 1: 128 × 64 for r = 0.25, 64 × 32 above, about
+  60 KB of base64 in all). The rough ball shows, at its reflection vector, these levels
+  interpolated linearly in r (r = 0 is the map itself), as engines blend mip levels.
 - **Display**: the exposure slider starts at the automatic exposure of
   :func:`envconv.preview.auto_exposure` (solid-angle-weighted log-average luminance to 0.18).
   The tone curve is OCIO's built-in config's default view (ACES 2.0 SDR) baked into a
@@ -16,7 +21,7 @@ the map, its irradiance and the display transforms are embedded in it as JSON.
   preset selected, the page shows the file as that tool would, i.e. at world direction w the
   pixel of envconv direction Mᵀw.
 - **URL fragment** (for links and tests): ``#view=+X`` (any of ±X ±Y ±Z; up +Y, or −Z for
-  +Y and +Z for −Y), ``conv=NAME``, ``yaw=``, ``pitch=``, ``fov=`` (degrees, vertical),
+  +Y and +Z for −Y), ``conv=NAME``, ``rough=`` (the rough ball's roughness, 0 to 1), ``yaw=``, ``pitch=``, ``fov=`` (degrees, vertical),
   ``exposure=`` (stops, absolute), ``tone=0`` (un-tone-mapped sRGB), ``spheres=0``,
   ``grid=1``, ``labels=0``, ``ui=0`` (hide the control panel). The document title ends in "(ready)" once the first frame is drawn.
 """
@@ -33,7 +38,7 @@ import numpy as np
 
 from .envmap import EnvMap
 
-__all__ = ["CAP_HEIGHT", "SHAPER", "rgbe_encode", "rgbe_decode", "page_presets", "build_page"]
+__all__ = ["CAP_HEIGHT", "SHAPER", "GGX_LEVELS", "ggx_page_levels", "rgbe_encode", "rgbe_decode", "page_presets", "build_page"]
 
 log = logging.getLogger(__name__)
 
@@ -41,6 +46,8 @@ log = logging.getLogger(__name__)
 CAP_HEIGHT = 1024
 #: log2 range of the display LUTs' input: 2⁻¹² to 2⁸ (0.00024 to 256 after exposure).
 SHAPER = (-12.0, 8.0)
+#: (perceptual roughness, level-0 height of the ggx:2 chain whose level 1 is embedded).
+GGX_LEVELS = ((0.25, 128), (0.5, 64), (0.75, 64), (1.0, 64))
 
 
 def rgbe_encode(rgb: np.ndarray) -> np.ndarray:
@@ -106,6 +113,22 @@ def _embedded(env: EnvMap) -> dict:
     return {"width": w, "height": h, "rgbe": base64.b64encode(rgbe_encode(rgb).tobytes()).decode()}
 
 
+def ggx_page_levels(work: EnvMap) -> list[EnvMap]:
+    """The GGX-prefiltered lat-longs of ``work`` embedded for the rough ball, one per
+    :data:`GGX_LEVELS` entry (level 1 of a ``mips="ggx:2"`` chain with that roughness),
+    prefiltered from ``work`` resampled to at most 512 high (0.35° pixels, fine for lobes of
+    r ≥ 0.25; half the time of a 1024-high source, and within 1% of it)."""
+    from .resample import convert
+
+    if work.pixels.shape[0] > 512:
+        work = convert(work, "latlong", size=512)
+    out = []
+    for rough, height in GGX_LEVELS:
+        chain = convert(work, "latlong", size=height, mips="ggx:2", roughness=[rough])
+        out.append(EnvMap(chain.levels[1], "latlong"))
+    return out
+
+
 def build_page(envmap: EnvMap, title: str = "", in_convention=None, cap: int = CAP_HEIGHT) -> str:
     """The viewer page for ``envmap`` as one HTML string (see the module docstring).
 
@@ -113,16 +136,16 @@ def build_page(envmap: EnvMap, title: str = "", in_convention=None, cap: int = C
     height cap of the embedded lat-long.
     """
     from .geometry import pixel_solid_angles
-    from .preview import auto_exposure
+    from .preview import auto_exposure, working_map
     from .resample import convert
-    from .sampling import default_size
 
-    size = min(cap, default_size(envmap, "latlong"))
-    work = convert(envmap, "latlong", size=size, in_convention=in_convention)
+    work = working_map(envmap, in_convention, cap)
     irr = convert(work, "latlong", size=32, irradiance=True)
     stops = auto_exposure(work.pixels[..., :3], pixel_solid_angles("latlong", work.size))
     data = {
         "env": _embedded(work), "irr": _embedded(irr), "exposure": round(stops, 2),
+        "ggx": {"rough": [r for r, _ in GGX_LEVELS],
+                "levels": [_embedded(level) for level in ggx_page_levels(work)]},
         "shaper": list(SHAPER), "conventions": page_presets(),
         "info": f"{title}: {envmap.layout.name} {envmap.pixels.shape[1]}x{envmap.pixels.shape[0]}"
                 f", shown as a {work.pixels.shape[1]}x{work.pixels.shape[0]} lat-long",

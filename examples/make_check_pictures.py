@@ -59,6 +59,11 @@ def main(outdir: Path) -> None:
         envconv("pattern", str(tmp / "mirrored.exr"), "--to", "latlong", "--size", "256",
                 "--out-convention=-x,y,z")  # fmt: skip
         envconv("preview", str(tmp / "mirrored.exr"), "-o", str(outdir / "check-sheet-mirrored.png"))
+        # a lat-long written as Blender writes one, seen in Blender's axes
+        envconv("pattern", str(tmp / "blender.exr"), "--to", "latlong", "--size", "256",
+                "--out-convention", "blender")  # fmt: skip
+        envconv("preview", str(tmp / "blender.exr"), "-o", str(outdir / "check-sheet-blender.png"),
+                "--in-convention", "blender", "--convention", "blender")  # fmt: skip
         # the viewer page, looking towards -X with the horizon grid on
         envconv("view", str(VENICE), "-o", str(tmp / "venice.html"))
         screenshot(tmp / "venice.html", "view=-X&grid=1", outdir / "check-view-venice.png")

@@ -173,7 +173,7 @@ def test_missing_dask_is_one_line(inputs, tmp_path, monkeypatch):
 
     monkeypatch.setitem(sys.modules, "dask.distributed", None)  # import now fails
     result = _batch(inputs, tmp_path, "--dask", "tcp://127.0.0.1:8786")
-    assert result.exit_code == 1
+    assert result.exit_code == 2  # an option this install cannot honour: usage, not a bad file
     assert result.stderr.strip() == (
         "envconv: error: --dask needs dask.distributed; install it with pip install 'envconv[dask]'"
     )
@@ -191,3 +191,38 @@ def test_progress_bar_on_a_terminal(capsys):
     assert err.count("\r[") == 4 and "ETA" in err
     assert "[########################] 4/4  done 2  skipped 1  failed 1" in err
     assert "failed  failed.exr (0.10 s): bad\n" in err  # failures get a line of their own
+
+
+# --- issue 15: the output policy across the jobs of a batch, before any job runs -------------
+
+
+def test_make_jobs_applies_the_output_policy_across_jobs(tmp_path):
+    from envconv.batch import make_jobs
+    from envconv.errors import UsageError
+    from envconv.pipeline import Pipeline, Resample, Write
+
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    for path in (a, b):
+        io.write(envconv.EnvMap(np.ones((4, 8, 3), np.float32), "latlong"), path)
+    os.symlink(b, tmp_path / "link.exr")
+
+    def jobs(*steps, no_clobber=False):
+        return make_jobs([str(a), str(b)], Pipeline(list(steps)), no_clobber)
+
+    # a's output is b through a link: any input of the batch is protected, not only the job's.
+    with pytest.raises(UsageError, match="never writes onto its inputs"):
+        jobs(Resample("latlong", size=4), Write(str(tmp_path / "{stem}_x.exr")),
+             Write(str(tmp_path / "link.exr")))  # fmt: skip
+    # {face} outputs are expanded: two jobs, one set of six files.
+    with pytest.raises(UsageError, match="would both write .*same_px.exr"):
+        jobs(Resample("cube-faces", size=4), Write(str(tmp_path / "same_{face}.exr")))
+    # One job, two outputs on one path.
+    with pytest.raises(UsageError, match="written twice"):
+        jobs(Resample("latlong", size=4), Write(str(tmp_path / "{stem}.out.exr")),
+             Resample("sphere", size=4), Write(str(tmp_path / "{stem}.out.exr")))  # fmt: skip
+    (tmp_path / "b_y.exr").write_bytes(b"old")
+    made = jobs(Resample("latlong", size=4), Write(str(tmp_path / "{stem}_y.exr")))
+    with pytest.raises(UsageError, match="no-clobber"):
+        jobs(Resample("latlong", size=4), Write(str(tmp_path / "{stem}_y.exr")), no_clobber=True)
+    assert all(s.params["no_clobber"] is False for s in made[0].pipeline.steps if isinstance(s, Write))
+    assert (tmp_path / "b_y.exr").read_bytes() == b"old" and not (tmp_path / "a_y.exr").exists()

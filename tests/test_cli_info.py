@@ -32,7 +32,7 @@ def test_info_json_reports_the_map(tmp_path, name, n):
     pixels = naive.pixel_average(name, n, analytic.radiance, 6)
     path = tmp_path / "map.exr"
     envconv.write(envconv.EnvMap(pixels, name), path, bit_depth="float")
-    result = run_cli(["info", path, "--json"])
+    result = run_cli(["info", path, "--json", "--stats"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
     height, width = pixels.shape[:2]
@@ -67,14 +67,14 @@ def test_info_reports_an_untagged_square_as_unknown_until_from(tmp_path):
     with layout "unknown", the candidates and why; --from places it."""
     path = tmp_path / "square.exr"
     write_plain(path, np.ones((16, 16, 3)))
-    result = run_cli(["info", path, "--json"])
+    result = run_cli(["info", path, "--json", "--stats"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
     assert record["layout"] == "unknown" and record["candidates"] == [
         "sphere", "angular", "octahedral", "equal-area"]
     assert "sphere, angular" in record["reason"] and "--from" in record["reason"]
     assert (record["width"], record["height"], record["size"], record["mean_radiance"]) == (16, 16, None, None)
-    result = run_cli(["info", path, "--json", "--from", "sphere"])
+    result = run_cli(["info", path, "--json", "--from", "sphere", "--stats"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
     assert record["layout"] == "sphere"
@@ -105,7 +105,7 @@ def test_info_describes_a_photograph_no_layout_fits(tmp_path):
     pixels = rng.uniform(0, 4, (860, 1262, 4)).astype(np.float16).astype(np.float32)
     path = tmp_path / "GoldenGate.exr"
     _oiio_file(path, pixels, "RGBA", attributes={"owner": "ILM", "oiio:ColorSpace": "lin_rec709_scene"})
-    result = run_cli(["info", path, "--json"])
+    result = run_cli(["info", path, "--json", "--stats"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
     assert record["layout"] == "unknown" and record["candidates"] == []
@@ -133,7 +133,7 @@ def test_info_reports_both_windows_of_an_image_with_holes(tmp_path):
     pixels = np.full((50, 60, 3), 2.0, np.float32)
     path = tmp_path / "window.exr"
     _oiio_file(path, pixels, "RGB", "float", display=(0, 0, 100, 80), data=(10, 5, 60, 50))
-    record = json.loads(run_cli(["info", path, "--json"]).stdout)
+    record = json.loads(run_cli(["info", path, "--json", "--stats"]).stdout)
     assert record["layout"] == "unknown"
     assert (record["width"], record["height"]) == (100, 80)
     assert record["display_window"] == [0, 0, 100, 80] and record["data_window"] == [10, 5, 60, 50]
@@ -161,3 +161,42 @@ def test_info_errors_are_one_line(tmp_path, content):
     assert result.exit_code != 0
     assert len(stderr_lines(result)) == 1, result.stderr
     assert "Traceback" not in result.output
+
+
+def test_info_reads_headers_only_unless_stats(tmp_path):
+    """A file whose header is whole but whose pixels are cut off: without --stats info
+    describes it from the header (so it cannot have read the pixels), with --stats the
+    pixel read fails with one line."""
+    path = tmp_path / "cut.exr"
+    noise = np.random.default_rng(1).uniform(0, 1, (32, 64, 3))  # does not compress away
+    write_plain(path, noise, attributes={"compression": "zip", "owner": "me"})
+    data = path.read_bytes()
+    path.write_bytes(data[: len(data) * 2 // 3])
+    result = run_cli(["info", path, "--json"])
+    assert result.exit_code == 0, result.stderr
+    record = json.loads(result.stdout)
+    assert (record["layout"], record["size"], record["width"], record["height"]) == ("latlong", 32, 64, 32)
+    assert record["metadata"]["Copyright"] == "me"
+    assert not {"min", "max", "nonfinite", "mean_radiance"} & set(record)
+    stats = run_cli(["info", path, "--json", "--stats"])
+    assert stats.exit_code == 1 and stats.stdout == ""
+    assert len(stderr_lines(stats)) == 1 and "cut.exr" in stats.stderr
+
+
+def test_info_on_a_face_set_reports_the_files_colour_space_and_metadata(tmp_path):
+    """Six sRGB PNG faces: info says sRGB and shows the files' own metadata (not the
+    working space's tag the read gives the map), and --stats reads all six."""
+    for k, face in enumerate(("px", "nx", "py", "ny", "pz", "nz")):
+        pixels = np.full((8, 8, 3), 40 * k, np.uint8)
+        _oiio_file(tmp_path / f"sky_{face}.png", pixels, "RGB", "uint8",
+                   attributes={"oiio:ColorSpace": "srgb_rec709_scene", "Artist": "someone"})  # fmt: skip
+    template = str(tmp_path / "sky_{face}.png")
+    record = json.loads(run_cli(["info", template, "--json"]).stdout)
+    assert (record["layout"], record["size"], record["width"], record["height"]) == ("cube-faces", 8, 48, 8)
+    assert record["colorspace"].startswith("sRGB")
+    assert record["metadata"]["oiio:ColorSpace"] == "srgb_rec709_scene"
+    assert record["metadata"]["Artist"] == "someone"
+    stats = json.loads(run_cli(["info", template, "--json", "--stats"]).stdout)
+    assert stats["min"] == [0.0] * 3  # face px holds code 0, nz code 200: sRGB-decoded
+    expected = ((200 / 255 + 0.055) / 1.055) ** 2.4
+    np.testing.assert_allclose(stats["max"], [expected] * 3, rtol=1e-3)

@@ -6,7 +6,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from envconv import color
+from envconv import color, quantize
 from envconv.errors import ColorError, UsageError
 
 LIN = "Linear Rec.709 (sRGB)"
@@ -204,11 +204,11 @@ def test_8bit_srgb_codes_survive_linear_round_trip(cfg):
     px = image(np.repeat(codes / 255.0, 3))
     lin = color.convert_colorspace(px, "srgb", "linear", cfg)
     back = color.convert_colorspace(lin, "linear", "srgb", cfg)
-    out, report = color.quantize(back, "uint8", dither=False)
+    out, report = quantize.quantize(back, "uint8", dither=False)
     assert out.dtype == np.uint8
     np.testing.assert_array_equal(out.reshape(-1, 3)[:, 0], codes)
     assert not report.clipped
-    dithered, _ = color.quantize(back, "uint8", dither=True)
+    dithered, _ = quantize.quantize(back, "uint8", dither=True)
     assert np.abs(dithered.astype(int) - out.astype(int)).max() <= 1
     assert dithered.reshape(-1, 3)[0].tolist() == [0, 0, 0]
     assert dithered.reshape(-1, 3)[-1].tolist() == [255, 255, 255]

@@ -100,6 +100,22 @@ def latlong_cmft(n):
     return LH(d)
 
 
+def threejs_uv(w):
+    """three.js ``equirectUv`` (src/renderers/shaders/ShaderChunk/common.glsl.js), then flipY
+    (v = 1 is the image's top row): the (u, v) of the image, v downward, world direction w."""
+    w = np.asarray(w, np.float64)
+    u = np.arctan2(w[..., 2], w[..., 0]) / (2 * np.pi) + 0.5
+    v = np.arcsin(np.clip(w[..., 1], -1, 1)) / np.pi + 0.5
+    return u, 1.0 - v
+
+
+def latlong_threejs(n):
+    """Inverse of threejs_uv at the pixel centres."""
+    u, v = _uv(2 * n, n)
+    phi, lat = 2 * np.pi * (u - 0.5), np.pi * (0.5 - v)
+    return np.stack([np.cos(lat) * np.cos(phi), np.sin(lat), np.cos(lat) * np.sin(phi)], -1)
+
+
 def latlong_openexr(n):
     u, v = _uv(2 * n, n)
     lon, lat = -2 * np.pi * (u - 0.5), -np.pi * (v - 0.5)
@@ -240,6 +256,10 @@ CASES = [
     ("ffmpeg", "latlong", latlong_ffmpeg, NL, True),
     ("cmft", "latlong", latlong_cmft, NL, True),
     ("openexr", "latlong", latlong_openexr, NL, True),
+    ("threejs", "latlong", latlong_threejs, NL, True),
+    # three.js samples a CubeTexture at (−x, y, z) (flipEnvMap = −1): GL faces, left-handed
+    ("threejs", "cube-faces", cube_file(HSTRIP, 6, 1, G_FACES, LH), NC, True),
+    ("threejs", "cube-vcross", cube_file(HDRSHOP_CROSS, 3, 4, G_FACES, LH), NC, True),
     ("cmft", "cube-vcross", cube_file(HDRSHOP_CROSS, 3, 4, G_FACES, LH), NC, True),
     ("cmft", "cube-hcross", cube_file(HCROSS, 4, 3, G_FACES, LH), NC, True),
     ("unity", "cube-vcross", cube_file(HDRSHOP_CROSS, 3, 4, G_FACES, LH), NC, True),
@@ -409,7 +429,7 @@ def test_cli_conventions(tmp_path):
     bad = runner.invoke(cli, [*args, "--in-convention", "blender", "--from", "sphere"])
     assert bad.exit_code != 0
     bad = runner.invoke(cli, [*args, "--out-convention", "nope"])
-    assert bad.exit_code == 1 and "unknown convention" in bad.output
+    assert bad.exit_code == 2 and "unknown convention" in bad.output  # a bad option value: usage
     assert "Traceback" not in bad.output
 
 
@@ -420,3 +440,26 @@ def test_out_axes_inverts_up_z():
     back = envconv.convert(zup, "cube-vcross", size=NC, samples=1, up="z").pixels
     valid = pixel_directions("cube-vcross", NC)[1] == 2
     assert np.abs(back - env(dirs))[valid].max() < 1e-5
+
+
+# CONVENTIONS.md, "Where known directions land": envconv's lat-long (u, v) of ±X, ±Z and q.
+LATLONG_TABLE = {(1, 0, 0): (0.25, 0.5), (-1, 0, 0): (0.75, 0.5), (0, 0, 1): (0.5, 0.5),
+                 (0, 0, -1): (0.0, 0.5), (0.48, 0.6, 0.64): (0.3976, 0.2952)}  # fmt: skip
+
+
+def test_threejs_latlong_is_the_cited_formula_on_the_known_directions():
+    """A three.js equirect pixel at the (u, v) its formula gives world w is the pixel where
+    envconv's table puts direction e; the preset must say w = M·e for every table row."""
+    m = resolve_convention("threejs", "latlong").matrix
+    for e, (u_e, v_e) in LATLONG_TABLE.items():
+        e = np.array(e, float) / np.linalg.norm(e)
+        # the world direction three.js reads at envconv's (u_e, v_e): search the sphere
+        grid = pixel_directions("latlong", 720)[0].reshape(-1, 3)
+        u_t, v_t = threejs_uv(grid)
+        du = np.abs((u_t - u_e + 0.5) % 1.0 - 0.5)
+        w = grid[np.argmin(du + np.abs(v_t - v_e))]
+        assert np.degrees(np.arccos(np.clip(w @ (m @ e), -1, 1))) < 0.5, (e, w, m @ e)
+    # and the three.js image centre (0.5, 0.5) is +X, u = 0.75 is +Z (formula, by hand)
+    assert np.allclose(threejs_uv([1.0, 0.0, 0.0]), (0.5, 0.5))
+    assert np.allclose(threejs_uv([0.0, 0.0, 1.0]), (0.75, 0.5))
+    assert np.allclose(m @ [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])  # envconv's centre is +Z

@@ -135,7 +135,7 @@ def test_default_bit_depth_follows_the_input(tmp_path, src_type, ext, expected):
 def test_bit_depth_the_format_cannot_store_is_a_one_line_error(tmp_path):
     write_plain(tmp_path / "in.exr", linear_values())
     result = convert(tmp_path / "in.exr", tmp_path / "out.exr", "--bit-depth", "uint8")
-    assert result.exit_code == 1 and len(stderr_lines(result)) == 1
+    assert result.exit_code == 2 and len(stderr_lines(result)) == 1  # arguments that contradict
     assert "half, float" in result.stderr and not (tmp_path / "out.exr").exists()
 
 
@@ -149,10 +149,10 @@ def test_exr_compression_is_written(tmp_path, name):
 def test_unknown_compression_names_the_choices(tmp_path):
     write_plain(tmp_path / "in.exr", linear_values())
     result = convert(tmp_path / "in.exr", tmp_path / "out.exr", "--compression", "lzma")
-    assert result.exit_code == 1 and len(stderr_lines(result)) == 1
+    assert result.exit_code == 2 and len(stderr_lines(result)) == 1  # a bad option value: usage
     assert "piz" in result.stderr and "dwaa" in result.stderr and "Traceback" not in result.output
     png = convert(tmp_path / "in.exr", tmp_path / "out.png", "--compression", "zip")
-    assert png.exit_code == 1 and "png" in png.stderr
+    assert png.exit_code == 2 and "png" in png.stderr
 
 
 # --- metadata --------------------------------------------------------------------------------

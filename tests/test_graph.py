@@ -87,7 +87,7 @@ def test_dry_run_prints_the_plan_without_pixels(hdri, tmp_path, monkeypatch):
     def no_pixels(*args, **kwargs):
         raise AssertionError("dry run read pixels")
 
-    monkeypatch.setattr(io, "read_file", no_pixels)
+    monkeypatch.setattr(io.reader, "read_file", no_pixels)
     result = run_cli(["run", path, "--dry-run"])
     assert result.exit_code == 0, result.output
     assert not (tmp_path / "build").exists()
@@ -140,7 +140,7 @@ def test_validation_errors_name_file_step_and_key(hdri, tmp_path, steps, needle)
         load_graph(path)
     assert str(path) in str(info.value) and needle in str(info.value)
     result = run_cli(["run", path])
-    assert result.exit_code == 1
+    assert result.exit_code == 2  # a graph that does not validate is bad usage
     assert needle in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert not (tmp_path / "out.exr").exists()
 
@@ -155,3 +155,59 @@ def test_bad_files_and_inputs(tmp_path):
     assert result.exit_code == 1 and "no input files match" in result.stderr
     extra = _graph(tmp_path, 'colour = 1\n[[steps]]\nstep = "write"\npath = "o.exr"\n', "x.toml")
     assert "unknown top-level key 'colour'" in run_cli(["run", extra]).stderr
+
+
+# --- issue 15: every key type-checked before any work; one home for samples/guard/mips -------
+
+
+def test_every_key_of_every_step_has_a_check():
+    from envconv.graph import CHECKS, STEP_KEYS
+
+    missing = {(kind, key) for kind, keys in STEP_KEYS.items() for key in keys if key not in CHECKS}
+    assert not missing, missing
+
+
+@pytest.mark.parametrize(
+    ("step", "entry"),
+    [("write", "bit_depth = 16"), ("write", 'compression = ["zip"]'), ("write", "no_clobber = 1"),
+     ("write", 'preview = 3'), ("resample", "in_convention = 5"), ("resample", "guard = 1.5"),
+     ("resample", "samples = 0"), ("resample", 'mips = "ggx:0"'), ("resample", 'up = "x"'),
+     ("resample", "rotate = [1, 2]"), ("read", "exposure = true"), ("read", "part = -1"),
+     ("read", 'faces = "nope"'), ("colorspace", "to = 3")],
+)  # fmt: skip
+def test_wrong_types_and_choices_name_the_step_and_the_key(tmp_path, step, entry):
+    key = entry.split(" =")[0]
+    tables = {
+        "read": '[[steps]]\nstep = "read"\npath = "in.exr"\n',
+        "colorspace": '[[steps]]\nstep = "colorspace"\nto = "ACEScg"\n',
+        "resample": '[[steps]]\nstep = "resample"\nto = "latlong"\n',
+        "write": '[[steps]]\nstep = "write"\npath = "o.exr"\n',
+    }
+    text = "".join(tables[k] + (entry + "\n" if k == step else "")
+                   for k in ("read", "colorspace", "resample", "write"))  # fmt: skip
+    text = text.replace('to = "ACEScg"\nto = 3', "to = 3")
+    with pytest.raises(UsageError, match=rf"step \d \({step}\): key '{key}': expected "):
+        load_graph(_graph(tmp_path, text))
+
+
+def test_samples_guard_and_mips_follow_one_rule_in_library_cli_and_graph(tmp_path):
+    """sampling.check_* is the one home: each bad value is refused by all three front doors."""
+    from envconv.sampling import check_guard, check_mips, check_samples
+
+    assert check_mips("ggx:3") == (3, True) and check_mips("box") == (True, False)
+    assert check_mips(0) == (True, False) and check_mips(None) == (None, False)
+    source = tmp_path / "in.exr"
+    io.write(envconv.EnvMap(np.ones((8, 16, 3), np.float32), "latlong"), source)
+    for option, bad, check in [("samples", 65, check_samples), ("guard", -1, check_guard),
+                               ("mips", "ggx:0", check_mips)]:  # fmt: skip
+        with pytest.raises(UsageError):
+            check(bad)
+        result = run_cli(["convert", source, tmp_path / "o.exr", "--to", "latlong",
+                          f"--{option}", bad])  # fmt: skip
+        assert result.exit_code == 2, (option, result.output)
+        text = f'[[steps]]\nstep = "read"\npath = "in.exr"\n[[steps]]\nstep = "resample"\n' \
+               f'to = "latlong"\n{option} = {json.dumps(bad)}\n[[steps]]\nstep = "write"\n' \
+               f'path = "o.exr"\n'  # fmt: skip
+        with pytest.raises(UsageError, match=f"key '{option}'"):
+            load_graph(_graph(tmp_path, text))
+    assert not (tmp_path / "o.exr").exists()

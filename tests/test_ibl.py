@@ -209,6 +209,6 @@ def test_cli_ggx_and_irradiance(tmp_path):
     assert irr.pixels.shape == (8, 16, 3) and irr.pixels.min() > 0
     result = run_cli(["convert", src, out, "--to", "cube-faces", "--mips", "ggx", "--roughness",
                       "0.1,x"])  # fmt: skip
-    assert result.exit_code == 1 and "roughness" in result.stderr
+    assert result.exit_code == 2 and "roughness" in result.stderr  # a bad option value: usage
     result = run_cli(["convert", src, out, "--to", "cube-faces", "--mips", "ggx:0"])
     assert result.exit_code == 2

@@ -299,14 +299,14 @@ def test_read_errors(tmp_path):
 
 
 def test_unknown_extension_raises(tmp_path):
-    with pytest.raises(ImageIOError, match=".xyz"):
+    with pytest.raises(envconv.UsageError, match=".xyz"):  # a bad argument: exit 2 in the CLI
         envconv.write(envconv.EnvMap(np.ones((4, 8, 3)), "latlong"), tmp_path / "m.xyz")
     assert os.listdir(tmp_path) == []
 
 
 def _fail_on_face(monkeypatch, face_to_fail):
     """Make envconv.io fail while writing one file, after the real writer produced it."""
-    import envconv.io_write as io_module
+    import envconv.io.writer as io_module
 
     real = io_module._write_one
 
@@ -420,7 +420,7 @@ def _oiio_channel_names(path):
 def test_plain_exr_reads_as_oiio_does(tmp_path, monkeypatch, names, pixel_type):
     """OpenEXR decodes the pixels of a plain file OIIO wrote: they must be OIIO's own reading,
     bit for bit (inf and NaN included), with OIIO's channels and metadata."""
-    import envconv.file_io as file_io_module
+    import envconv.io.files as file_io_module
 
     rng = np.random.default_rng(4)
     pixels = (rng.standard_normal((12, 24, len(names))) * 100).astype(np.float32)
@@ -591,7 +591,7 @@ def test_openexr_thread_pool_follows_oiio_exr_threads():
     import OpenEXR
     import OpenImageIO as oiio
 
-    from envconv.exr_io import _set_openexr_threads
+    from envconv.io.exr import _set_openexr_threads
 
     threads, pool = oiio.get_int_attribute("exr_threads"), OpenEXR.global_thread_count()
     try:

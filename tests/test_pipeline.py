@@ -179,7 +179,7 @@ def test_plan_reads_headers_only(sky, tmp_path, monkeypatch):
     def no_pixels(*args, **kwargs):
         raise AssertionError("plan read pixels")
 
-    monkeypatch.setattr(io, "read_file", no_pixels)
+    monkeypatch.setattr(io.reader, "read_file", no_pixels)
     faces, para = Pipeline(steps).plan()
     expected_n = envconv.resample.default_size(
         envconv.EnvMap(np.zeros((32, 64, 3), np.float32), "latlong"), "cube-faces"
@@ -208,8 +208,155 @@ def test_failure_reports_what_was_written(sky, tmp_path):
         Resample("sphere", size=8),
         Write(tmp_path / "ok.exr"),
         Resample("sphere", size=8),
-        Write(tmp_path / "bad.unknownext"),
+        Write(tmp_path / "missing" / "bad.exr", makedirs=False),  # fails only when written
     ]
     with pytest.raises(envconv.EnvconvError):
         Pipeline(steps).run(written=written)
     assert written == [str(tmp_path / "ok.exr")]
+
+
+def test_bad_output_settings_fail_before_any_file_is_written(sky, tmp_path):
+    steps = [Read(sky), Resample("sphere", size=8), Write(tmp_path / "ok.exr"),
+             Resample("sphere", size=8), Write(tmp_path / "bad.unknownext")]  # fmt: skip
+    with pytest.raises(envconv.EnvconvError):
+        Pipeline(steps).run()
+    assert not (tmp_path / "ok.exr").exists()
+
+
+# --- issue 15: one engine; the rule for pixel steps after a write; output policy -------------
+
+
+def _oiio_pixels(path):
+    """Pixels and ``oiio:ColorSpace`` of a file as OpenImageIO reads it (not envconv)."""
+    import OpenImageIO as oiio
+
+    buf = oiio.ImageBuf(str(path))
+    return buf.get_pixels(oiio.FLOAT), buf.spec().getattribute("oiio:ColorSpace")
+
+
+def test_write_keeps_the_colour_space_of_a_colorspace_step(sky, tmp_path):
+    """``colorspace --to ACEScg`` then ``write``: the file holds OCIO's own conversion of the
+    plain output's pixels and is tagged ACEScg (main undid the step: plain pixels, Rec.709)."""
+    import PyOpenColorIO as ocio
+
+    plain, cg = tmp_path / "plain.exr", tmp_path / "cg.exr"
+    Pipeline([Read(sky), Resample("latlong", size=16), Write(plain, bit_depth="float"),
+              Resample("latlong", size=16), envconv.pipeline.Colorspace("ACEScg"),
+              Write(cg, bit_depth="float")]).run()  # fmt: skip
+    config = ocio.Config.CreateFromFile("ocio://default")
+    linear, tag = _oiio_pixels(plain)
+    assert config.getColorSpace(tag).getName() == "Linear Rec.709 (sRGB)"
+    truth = np.array(linear[..., :3], np.float32, copy=True)
+    config.getProcessor("Linear Rec.709 (sRGB)", "ACEScg").getDefaultCPUProcessor().applyRGB(truth)
+    pixels, tag = _oiio_pixels(cg)
+    assert config.getColorSpace(tag).getName() == "ACEScg"
+    np.testing.assert_allclose(pixels[..., :3], truth, rtol=1e-5, atol=1e-6)
+    assert np.abs(pixels - linear).max() > 1e-3  # the conversion is not a no-op here
+
+
+def test_write_names_its_own_colour_space_over_the_step(sky, tmp_path):
+    """``--output-colorspace`` on the write wins: back to Rec.709, the plain output again."""
+    plain, back = tmp_path / "plain.exr", tmp_path / "back.exr"
+    Pipeline([Read(sky), Resample("latlong", size=16), Write(plain, bit_depth="float"),
+              envconv.pipeline.Colorspace("ACEScg"),
+              Write(back, bit_depth="float", output_colorspace="lin_rec709")]).run()  # fmt: skip
+    np.testing.assert_allclose(_oiio_pixels(back)[0], _oiio_pixels(plain)[0], rtol=1e-5, atol=1e-6)
+
+
+def test_a_pixel_step_after_a_write_changes_the_latest_output_and_the_source(sky, tmp_path):
+    """``resample --size 8 write e exposure -1 write f``: f is e halved (main wrote the full
+    source); a resample after it sees the halved source too (x 0.5 is exact in float)."""
+    e, f, g = tmp_path / "e.exr", tmp_path / "f.exr", tmp_path / "g.exr"
+    Pipeline([Read(sky), Resample("latlong", size=8), Write(e), Exposure(-1), Write(f),
+              Resample("latlong", size=8), Write(g)]).run()  # fmt: skip
+    pe, pf, pg = (_oiio_pixels(p)[0] for p in (e, f, g))
+    assert pf.shape == pe.shape == (8, 16, 3)
+    assert np.array_equal(pf, pe * 0.5) and np.array_equal(pg, pf)
+
+
+def test_a_rotate_after_a_written_output_needs_a_resample_before_the_next_write(sky, tmp_path):
+    steps = [Read(sky), Resample("latlong", size=8), Write(tmp_path / "a.exr"), Rotate(yaw=90),
+             Write(tmp_path / "b.exr")]  # fmt: skip
+    with pytest.raises(UsageError, match="step 5 .*rotate of step 4"):
+        Pipeline(steps).validate()
+    assert not (tmp_path / "a.exr").exists()
+
+
+def test_plan_and_run_agree_on_the_files(sky, tmp_path):
+    steps = [Read(sky), Resample("cube-faces", size=4), Write(tmp_path / "f_{face}.exr"),
+             Exposure(-1), Write(tmp_path / "g_{face}_{size}.png"),
+             Resample("latlong", size=8, mips=3), Write(tmp_path / "m_{level}.exr")]  # fmt: skip
+    planned = Pipeline(steps).output_files()
+    done = [f for o in Pipeline(steps).run(keep=False) for f in o.files]
+    assert planned == done and len(done) == 6 + 6 + 3
+    assert all((tmp_path / p).exists() for p in done)
+
+
+@pytest.mark.parametrize("make_link", ["same", "symlink", "hardlink"])
+def test_a_pipeline_never_writes_onto_its_input(sky, tmp_path, make_link):
+    import os
+    import shutil
+
+    source = tmp_path / "in.exr"
+    shutil.copy(sky, source)
+    target = {"same": source, "symlink": tmp_path / "s.exr", "hardlink": tmp_path / "h.exr"}[make_link]
+    if make_link == "symlink":
+        os.symlink(source, target)
+    elif make_link == "hardlink":
+        os.link(source, target)
+    before = source.read_bytes()
+    with pytest.raises(UsageError, match="never writes onto its inputs"):
+        Pipeline([Read(source), Resample("latlong", size=4), Write(target)]).run()
+    assert source.read_bytes() == before
+
+
+def test_two_outputs_on_one_path_and_no_clobber_are_refused_before_any_work(sky, tmp_path):
+    first = tmp_path / "a.exr"
+    steps = [Read(sky), Resample("latlong", size=4), Write(first),
+             Resample("sphere", size=4), Write(tmp_path / "." / "a.exr")]  # fmt: skip
+    with pytest.raises(UsageError, match="written twice"):
+        Pipeline(steps).run()
+    assert not first.exists()
+    first.write_bytes(b"old")
+    with pytest.raises(UsageError, match="no-clobber"):
+        Pipeline([Read(sky), Resample("latlong", size=4), Write(tmp_path / "new.exr"),
+                  Write(first, no_clobber=True)]).run()  # fmt: skip
+    assert first.read_bytes() == b"old" and not (tmp_path / "new.exr").exists()
+    Pipeline([Read(sky), Resample("latlong", size=4), Write(first)]).run()  # replaced
+    assert io.read(first).size == 4
+
+
+def test_convert_file_is_the_pipeline_read_resample_write(tmp_path):
+    """api.convert_file and a Pipeline give the same pixels, and the same NaN/Inf warnings
+    (on main the pipeline ignored NaN handling that only convert knew)."""
+    from envconv.api import convert_file
+
+    pixels = np.ones((8, 16, 3), np.float32)
+    pixels[3, 5, 1] = np.nan
+    source = tmp_path / "nan.exr"
+    io.write(envconv.EnvMap(pixels, "latlong"), source)
+    notes_a: list[str] = []
+    convert_file(source, tmp_path / "a.exr", resample={"to": "sphere", "size": 8},
+                 color={"fix_nonfinite": "black", "exposure": -1}, warnings=notes_a)  # fmt: skip
+    notes_b: list[str] = []
+    Pipeline([Read(source, fix_nonfinite="black", exposure=-1), Resample("sphere", size=8),
+              Write(tmp_path / "b.exr")]).run(warnings=notes_b)  # fmt: skip
+    a, b = _oiio_pixels(tmp_path / "a.exr")[0], _oiio_pixels(tmp_path / "b.exr")[0]
+    assert np.array_equal(a, b) and np.isfinite(a).all()
+    assert notes_a == notes_b and len(notes_a) == 1 and "1 NaN" in notes_a[0]
+
+
+def test_user_variables_use_each_other_but_not_in_a_cycle():
+    from envconv.steps import check_variables
+
+    assert check_variables({"a": "{dir}/x", "b": "{a}_{stem}"}) == {"a": "{dir}/x", "b": "{dir}/x_{stem}"}
+    with pytest.raises(UsageError, match="cycle"):
+        check_variables({"a": "{b}", "b": "{a}"})
+    with pytest.raises(UsageError, match="unknown variable"):
+        check_variables({"a": "{nope}"})
+    assert expand_path("{b}.exr", {"dir": "d", "stem": "s"}, {"b": "{dir}/x_{stem}"}) == "d/x_s.exr"
+
+
+def test_count_levels_reads_the_mip_requests_resample_takes():
+    assert count_levels(64, 32, "ggx:3") == 3 and count_levels(64, 32, "ggx") == 7
+    assert count_levels(64, 32, "box:2") == 2 and count_levels(64, 32, "all") == 7

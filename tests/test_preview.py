@@ -236,7 +236,7 @@ def test_convert_preview_never_overwrites_the_output(tmp_path):
     out = tmp_path / "out.png"
     result = CliRunner().invoke(cli, ["convert", str(src), str(out), "--to", "latlong",
                                       "--preview", str(out)])  # fmt: skip
-    assert result.exit_code != 0 and "--preview" in result.output and not out.exists()
+    assert result.exit_code != 0 and "written twice" in result.output and not out.exists()
 
 
 def test_stats_count_nans_and_find_the_brightest_direction():
@@ -255,3 +255,104 @@ def test_stats_count_nans_and_find_the_brightest_direction():
     # the 4×4 block is centred within a pixel (0.7°) of the sun; the answer is a pixel centre
     assert np.degrees(np.arccos(np.dot(stats["brightest"], sun))) < 2.5
     assert (stats["layout"], stats["width"], stats["height"]) == ("latlong", 512, 256)
+
+
+# Tool axis → the envconv axis it is, restated from each tool's documented frame (not from
+# envconv.conventions): envconv is Y-up right-handed, and a camera looking along +Z with up +Y
+# has screen right −X (right = forward × up).
+#   Blender: Z up, right-handed; the glTF exporter's swizzle (x, y, z) → (x, z, −y).
+#   Unity: Y up, left-handed, +Z forward, +X right: so +X is envconv's right of +Z, −X.
+#   Unreal: Z up, left-handed, +X forward, +Y right: +X → +Z, +Y → −X, +Z → +Y.
+#   three.js: Y up, right-handed, like OpenGL: envconv's own axes.
+TOOL_AXES = {
+    "blender": {"+X": "+X", "-X": "-X", "+Y": "-Z", "-Y": "+Z", "+Z": "+Y", "-Z": "-Y"},
+    "unity": {"+X": "-X", "-X": "+X", "+Y": "+Y", "-Y": "-Y", "+Z": "+Z", "-Z": "-Z"},
+    "unreal": {"+X": "+Z", "-X": "-Z", "+Y": "-X", "-Y": "+X", "+Z": "+Y", "-Z": "-Y"},
+    "threejs": {axis: axis for axis in LABELS},
+}
+
+
+@pytest.fixture(scope="module")
+def pattern_work():
+    return working_map(render_pattern("latlong", 256, samples=2))
+
+
+@pytest.mark.parametrize("tool", list(TOOL_AXES))
+def test_views_in_a_tools_axes_show_that_axis(pattern_work, tool):
+    """The view labelled with a tool's axis shows the analytic pattern's label of the envconv
+    axis the tool's documented frame puts there (Blender's "+Z" view shows "+Y"), upright."""
+    views = perspective_views(pattern_work, VIEW, convention=tool)
+    assert sorted(views) == sorted(LABELS)
+    for axis, ours in TOOL_AXES[tool].items():
+        truth = pattern(camera_dirs(ours))
+        plate = (truth.max(axis=-1) < 0.05) | (truth.min(axis=-1) > 0.99)
+        error = float(np.abs(views[axis][..., :3] - truth)[plate].mean())
+        assert error < LABEL_LIMIT, (tool, axis, ours, error)
+        # off the lines and plate the tint is envconv's axis (0.5 + 0.4·d), so "+X" and "-X"
+        # (whose plates differ by one bar) are told apart too
+        base = 0.5 + 0.4 * camera_dirs(ours)
+        plain = np.all(np.abs(truth - base) < 1e-9, axis=-1)
+        k, sign = "XYZ".index(ours[1]), 1 if ours[0] == "+" else -1
+        assert sign * (views[axis][plain][:, k].mean() - 0.5) > 0.25, (tool, axis, ours)
+
+
+def test_a_frame_given_as_axes_is_that_frame():
+    from envconv.preview import view_axes
+
+    assert view_axes("x,z,-y") == view_axes("blender") == TOOL_AXES["blender"]
+    assert view_axes(None) == {axis: axis for axis in LABELS}
+
+
+def test_preview_cli_convention(tmp_path):
+    import OpenImageIO as oiio
+
+    src = tmp_path / "pat.exr"
+    envconv.write(render_pattern("latlong", 64), str(src))
+    runner = CliRunner()
+    sheets = {}
+    for conv in (None, "blender"):
+        out = tmp_path / f"{conv}.png"
+        args = ["preview", str(src), "-o", str(out)] + (["--convention", conv] if conv else [])
+        result = runner.invoke(cli, args)
+        assert result.exit_code == 0, result.output
+        sheets[conv] = oiio.ImageBuf(str(out)).get_pixels(oiio.UINT8)
+    assert sheets[None].shape == sheets["blender"].shape
+    assert not np.array_equal(sheets[None], sheets["blender"])
+    result = runner.invoke(cli, ["preview", str(src), "-o", str(tmp_path / "x.png"), "--convention", "blendr"])
+    assert result.exit_code == 2 and "did you mean blender" in result.output
+    assert len(result.output.strip().splitlines()) == 1
+
+
+def test_thumbnail_is_the_box_average_and_range_skips_non_finite():
+    from envconv.preview import _range_and_nans, _thumbnail
+
+    rng = np.random.default_rng(5)
+    px = rng.uniform(-1, 5, (530, 1060, 3)).astype(np.float32)  # not a multiple of the step
+    env = envconv.EnvMap(px, "latlong")
+    thumb = _thumbnail(env, 100)  # step 11: 48 × 96 blocks of 11 × 11
+    want = px[: 48 * 11, : 96 * 11].astype(np.float64).reshape(48, 11, 96, 11, 3).mean(axis=(1, 3))
+    assert thumb.shape == (48, 96, 3) and np.allclose(thumb, want, atol=1e-5)
+    assert _range_and_nans(env) == (float(px.min()), float(px.max()), 0)
+    px[300, 7, 1], px[400, 9, 0], px[5, 5, 2] = np.inf, np.nan, -np.inf
+    assert _range_and_nans(env) == (float(px[np.isfinite(px)].min()), float(px[np.isfinite(px)].max()), 1)
+
+
+def test_a_large_lat_long_is_box_averaged_first_and_still_right():
+    """A 320-high lat-long, over 4 × the working height 64 (so box-averaged by 2 before
+    resampling) of a smooth analytic sky: the working lat-long holds the sky at its pixel
+    centres."""
+
+    def sky(d):
+        return np.stack([1 + 0.5 * d[..., 0], 1 + 0.3 * d[..., 1] ** 2, 1 - 0.4 * d[..., 2]], -1)
+
+    env = envconv.EnvMap(sky(envconv.geometry.pixel_directions("latlong", 320)[0]).astype(np.float32), "latlong")
+    work = working_map(env, height=64)
+    assert work.pixels.shape == (64, 128, 3)
+    # truth: the solid-angle mean of the sky over each working pixel, 8 × 8 points per pixel
+    lat = np.pi * (0.5 - (np.arange(64 * 8) + 0.5) / (64 * 8))
+    lon = 2 * np.pi * (0.5 - (np.arange(128 * 8) + 0.5) / (128 * 8))  # u = 0.5 - lon / 2π
+    lon, lat = np.meshgrid(lon, lat)
+    d = np.stack([np.cos(lat) * np.sin(lon), np.sin(lat), np.cos(lat) * np.cos(lon)], -1)
+    w = np.cos(lat)[..., None]
+    want = (sky(d) * w).reshape(64, 8, 128, 8, 3).sum(axis=(1, 3)) / w.reshape(64, 8, 128, 8, 1).sum(axis=(1, 3))
+    assert np.abs(work.pixels - want).max() < 2e-3  # measured 0.96e-3 (values 0.6 to 1.5)

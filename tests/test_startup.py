@@ -36,7 +36,7 @@ def test_importing_the_command_line_loads_neither_the_core_nor_the_layouts():
     """The entry point stays light until a command needs the kernels (``layouts --help`` or a
     usage error should not wait for them); nothing imports numba any more."""
     out = _run_python(
-        "import sys, envconv, envconv.cli, envconv.file_io\n"
+        "import sys, envconv, envconv.cli, envconv.io.files\n"
         "print(sorted(m for m in ('numba', 'envconv._core', 'envconv.layouts', 'envconv.resample')"
         " if m in sys.modules))"
     )

@@ -1,4 +1,4 @@
-"""DDS and KTX2 files (envconv.textures, envconv.dds, envconv.ktx2), read by independent readers.
+"""DDS and KTX2 files (envconv.io.textures, envconv.io.dds, envconv.io.ktx2), read by independent readers.
 
 parse-dds and ktx-parse (npm, tests/node) locate every image from the header alone; the bytes
 they find must be the in-memory chain, bit for bit, and the faces must be where the D3D/Vulkan

@@ -17,7 +17,7 @@ import pytest
 from conftest import run_cli, stderr_lines
 
 import envconv
-from envconv.file_io import place_in_display, read_file_header
+from envconv.io.files import place_in_display, read_file_header
 
 
 def write_window(path, pixels, display, data, names="RGB", pixel_type="float"):

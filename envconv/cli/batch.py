@@ -12,10 +12,11 @@ from typing import Any
 
 import click
 
-from ..batch import expand_inputs, make_jobs, run_batch, write_report
+from ..batch import BatchInterrupted, expand_inputs, make_jobs, run_batch, write_report
 from ..graph import load_graph
 from ..pipeline import Pipeline, Resample, Write
 from .main import cli
+from .options import no_clobber_option
 from .progress import Progress, summary_line
 
 __all__ = ["batch_command", "batch_options", "BatchSpec", "run_batch_command", "execute"]
@@ -27,6 +28,7 @@ BATCH_OPTIONS = [
     click.option("--report", "report", metavar="FILE.json", help="Write one JSON record per input (status, outputs, seconds, error)."),
     click.option("--dask", "dask", metavar="SCHEDULER", help="Run the jobs on a Dask cluster (tcp://host:8786); needs envconv[dask]."),
     click.option("--dry-run", is_flag=True, help="Print every output (layout, size, levels, files) without reading pixels."),
+    no_clobber_option,
 ]  # fmt: skip
 
 
@@ -63,7 +65,11 @@ class BatchSpec:
 def batch_command(inputs, out, graph, **options):
     """Run the steps that follow on every input (files, globs or directories).
 
-    A bad file never stops the batch; the exit status is 1 if any input failed.
+    A bad file never stops the batch; the exit status is 1 if any input failed. Before any
+    work the batch is refused if an output is one of its inputs (also through a link, e.g.
+    --out '{dir}/{stem}.exr'), if two outputs share a path, and with -n if an output exists.
+    A worker that dies costs only its own job, run once more on a fresh worker. SIGINT/SIGTERM
+    cancel the queued jobs, write the report of what finished and exit 130/143.
 
     \b
     Example:
@@ -105,7 +111,9 @@ def run_batch_command(spec: BatchSpec, steps: list) -> None:
         raise click.UsageError("nothing would be written: give --out or a write step")
     pipeline = Pipeline(steps, variables)
     pipeline.validate(input="input.exr", require_writes=True)
-    execute(make_jobs(expand_inputs(patterns), pipeline), **spec.options)
+    options = dict(spec.options)
+    jobs = make_jobs(expand_inputs(patterns), pipeline, options.pop("no_clobber", False))
+    execute(jobs, **options)
 
 
 def execute(jobs, workers=1, skip_existing=False, update=False, report=None, dask=None,
@@ -124,6 +132,10 @@ def execute(jobs, workers=1, skip_existing=False, update=False, report=None, das
     progress = Progress(len(jobs))
     try:
         result = run_batch(jobs, workers=workers, mode=mode, dask=dask, on_record=progress.update)
+    except BatchInterrupted as exc:  # the report of what finished, then exit 130/143
+        if report:
+            write_report(report, exc.result)
+        raise
     finally:
         progress.close()
     if report:

@@ -1,20 +1,27 @@
 """Chained steps: ``envconv read IN resample --to L write OUT …``.
 
 Each command returns a step object of :mod:`envconv.pipeline`; the group's result callback
-hands the list to :func:`run_chain`, which validates the whole chain before reading a pixel and
-then runs it (or, after ``batch``, runs it once per input).
+hands the list to :func:`envconv.cli.compose.run_chain`, which validates the whole chain before
+reading a pixel and then runs it (or, after ``batch``, runs it once per input).
 """
 
 from __future__ import annotations
 
 import click
 
-from ..pipeline import Colorspace, Exposure, Pipeline, Read, Resample, Rotate, Write
+from ..pipeline import Colorspace, Exposure, Read, Resample, Rotate, Write
 from .main import cli
-from .options import read_options, resample_options, split_options, write_options
+from .options import (
+    color_options,
+    no_clobber_option,
+    read_options,
+    resample_options,
+    split_options,
+    write_options,
+)
 
 __all__ = ["read_step", "rotate_step", "exposure_step", "colorspace_step", "resample_step",
-           "write_step", "run_chain"]  # fmt: skip
+           "write_step"]  # fmt: skip
 
 # Negative numbers (rotate -90, exposure -1.5) must reach the argument, not the option parser.
 _NUMBERS = {"ignore_unknown_options": True}
@@ -23,16 +30,19 @@ _NUMBERS = {"ignore_unknown_options": True}
 @cli.command("read")
 @click.argument("input_path", metavar="[INPUT]", required=False)
 @read_options
+@color_options
 def read_step(input_path, **options):
     """Read INPUT as the source of the steps that follow.
 
     After `batch` the INPUT is left out: each batch input is read with these options.
+    NaN/Inf, --exposure and --clamp-negative are handled right after reading, as in `convert`.
 
     \b
     Example:
       envconv read sky.exr --from latlong resample --to cube-vcross write cross.exr
     """
-    return Read(input_path, **split_options(options)[0])
+    read, _, _, prepare = split_options(options, with_color=True)
+    return Read(input_path, **read, **prepare)
 
 
 @cli.command("rotate", context_settings=_NUMBERS)
@@ -60,7 +70,10 @@ def rotate_step(angles, yaw, pitch, roll):
 @cli.command("exposure", context_settings=_NUMBERS)
 @click.argument("stops", type=float)
 def exposure_step(stops):
-    """Scale colour (not alpha) by 2**STOPS, on the source or, after a resample, on that output.
+    """Scale colour (not alpha) by 2**STOPS.
+
+    Between a resample and its first write: that output only. Elsewhere: the source and the
+    latest output, so a later write without a resample writes the latest output changed.
 
     \b
     Example:
@@ -74,7 +87,10 @@ def exposure_step(stops):
 @click.option("--from", "src", help="Colour space of the data (default: the file's).")
 @click.option("--ocio-config", "config", metavar="PATH", help="OpenColorIO config.")
 def colorspace_step(dst, src, config):
-    """Convert colour through OpenColorIO, on the source or, after a resample, on that output.
+    """Convert colour through OpenColorIO (same rule as exposure: see `exposure --help`).
+
+    A later write keeps this colour space and tags the file with it, unless the write gives
+    --output-colorspace.
 
     \b
     Example:
@@ -99,34 +115,22 @@ def resample_step(**options):
 @cli.command("write")
 @click.argument("output_path", metavar="OUTPUT")
 @write_options
+@no_clobber_option
 @click.option("--preview", "preview", metavar="PNG", help="Also write a tone-mapped 8-bit picture of what is written (same path variables; see docs/check-a-map.md).")
-def write_step(output_path, preview, **options):
-    """Write the latest resample (or the source) to OUTPUT.
+def write_step(output_path, preview, no_clobber, **options):
+    """Write the latest output (the last resample, or the source) to OUTPUT.
 
     OUTPUT may use {stem} {name} {ext} {dir} of the input, {layout} and {size} of the output,
-    and {face} for multi-file layouts.
+    and {face} for multi-file layouts. After a colorspace step the file keeps that colour space
+    (and is tagged with it) unless --output-colorspace is given.
+
+    Before any work the chain is refused if an output is an input (also through a link) or two
+    outputs share a path, and with -n if an output exists; otherwise an existing file is
+    replaced atomically (written to a temporary file, then renamed).
 
     \b
     Example:
       envconv read sky.exr resample --to cube-faces --size 256 write '{stem}_{face}.exr'
       envconv read sky.exr resample --to cube-vcross write cross.exr --preview cross.png
     """
-    return Write(output_path, preview=preview, **split_options(options)[2])
-
-
-def run_chain(steps: list) -> None:
-    """Validate and run a chain of steps; a leading batch spec runs them per input."""
-    from .batch import BatchSpec, run_batch_command
-
-    if isinstance(steps[0], BatchSpec):
-        if any(isinstance(s, BatchSpec) for s in steps[1:]):
-            raise click.UsageError("batch can appear only once, at the start of the chain")
-        run_batch_command(steps[0], steps[1:])
-        return
-    if any(isinstance(s, BatchSpec) for s in steps):
-        raise click.UsageError("batch must come first: envconv batch INPUTS... STEPS...")
-    pipeline = Pipeline(steps)
-    pipeline.validate(require_writes=True)
-    for output in pipeline.run(keep=False):
-        for path in output.files:
-            click.echo(path)
+    return Write(output_path, preview=preview, no_clobber=no_clobber, **split_options(options)[2])

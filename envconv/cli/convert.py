@@ -7,6 +7,7 @@ import click
 from .main import cli
 from .options import (
     color_options,
+    no_clobber_option,
     read_options,
     resample_options,
     split_options,
@@ -23,14 +24,21 @@ __all__ = ["convert_command"]
 @color_options
 @resample_options
 @write_options
+@no_clobber_option
 @click.option("--preview", "preview", metavar="PNG", help="Also write a tone-mapped 8-bit picture of the output (auto exposure, ACES SDR view; see docs/check-a-map.md).")
 @click.option("--dry-run", is_flag=True, help="Print what would be written; write nothing.")
-def convert_command(input_path, output_path, dry_run, preview, **options):
+def convert_command(input_path, output_path, dry_run, preview, no_clobber, **options):
     """Convert INPUT to layout --to and write OUTPUT.
 
     Multi-file layouts (cube-faces, paraboloid-split) take {face} in the path. Resampling
     runs in scene-linear float32: the input is converted from its colour space and the
-    output to --output-colorspace (see docs/color.md). Warnings go to stderr.
+    output to --output-colorspace (see docs/color.md). Warnings go to stderr. This is the
+    chain `read INPUT resample --to ... write OUTPUT`: the same engine, the same results.
+
+    Before any work, envconv refuses an OUTPUT (or --preview) that is the input (also through
+    a link) or that is written twice, and with -n an OUTPUT that exists; otherwise an existing
+    file is replaced atomically (a temporary file renamed into place). Missing output
+    directories are created.
 
     \b
     Example:
@@ -40,6 +48,7 @@ def convert_command(input_path, output_path, dry_run, preview, **options):
     from ..api import convert_file, plan_convert
 
     read_kw, resample_kw, write_kw, color_kw = split_options(options, with_color=True)
+    write_kw["no_clobber"] = no_clobber
     if dry_run:
         plan = plan_convert(input_path, output_path, read_kw, resample_kw, write_kw, color_kw)
         _echo_plan(plan)

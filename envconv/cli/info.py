@@ -17,21 +17,24 @@ __all__ = ["info_command"]
 @click.option("--from", "from_", type=layout_choice(), help="Input layout (default: detect).")
 @click.option("--level", type=click.IntRange(min=0), default=0, help="MIP level to read.")
 @click.option("--part", metavar="NAME", help="Part of a multi-part file to describe alone (name or index).")
+@click.option("--stats", is_flag=True, help="Also read the pixels: value range, NaN/Inf count, mean radiance.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
-def info_command(input_path, from_, level, part, as_json):
-    """Describe INPUT, any image: layout, size, windows, channels, parts, range, metadata.
+def info_command(input_path, from_, level, part, stats, as_json):
+    """Describe INPUT, any image: layout, size, windows, channels, parts, colour space, metadata.
 
-    An image no layout fits is still described, with layout 'unknown' and the candidates
-    and reason. The mean radiance (of a map) is weighted by each pixel's solid angle over
-    the valid region.
+    Only the headers are read (milliseconds, whatever the size) unless --stats is given,
+    which reads the pixels for the value range, the NaN/Inf count and the mean radiance
+    (of a map: weighted by each pixel's solid angle over the valid region). An image no
+    layout fits is still described, with layout 'unknown' and the candidates and reason.
 
     \b
     Example:
       envconv info sky.exr --json
+      envconv info sky.exr --stats
     """
     from ..info import describe
 
-    record = describe(input_path, layout=from_, level=level, part=part)
+    record = describe(input_path, layout=from_, level=level, part=part, stats=stats)
     if as_json:
         click.echo(json.dumps(record, indent=2, default=str))
         return

@@ -22,11 +22,13 @@ def layouts_command():
       envconv layouts
     """
     from ..facesets import FACE_SETS
-    from ..layouts import LAYOUTS
+    from ..layouts import ALIASES, LAYOUTS
 
     width = max(len(name) for name in LAYOUTS)
     for name, layout in LAYOUTS.items():
-        click.echo(f"{name:<{width}}  {layout.description}")
+        aliases = [alias for alias, target in ALIASES.items() if target == name]
+        also = f" (also {', '.join(aliases)})" if aliases else ""
+        click.echo(f"{name:<{width}}  {layout.description}{also}")
     click.echo("")
     click.echo("face sets of cube-faces (--in-convention / --out-convention NAME):")
     width = max(len(name) for name in FACE_SETS)

@@ -3,12 +3,15 @@
 ``envconv`` is a chained group: ``envconv read IN resample … write OUT resample … write OUT2``.
 Each command of a chain parses its own arguments up to the next command name (options may
 follow positional arguments, as in ``write out.exr --bit-depth half``); the result callback
-composes the steps (:mod:`envconv.cli.chain`). ``convert``, ``info``, ``layouts`` and ``run``
+composes the steps (:mod:`envconv.cli.compose`). ``convert``, ``info``, ``layouts`` and ``run``
 are whole commands that cannot be chained with others.
 
-Library errors (:class:`envconv.errors.EnvconvError`) print one line on stderr and exit 1; click
-usage errors exit 2; anything unexpected prints one line and exits 3 (set ``ENVCONV_DEBUG=1``
-for the traceback).
+Exit statuses: 0 success; 2 bad usage (click's usage errors and envconv's own
+:class:`envconv.errors.UsageError`); 1 a run-time failure (any other
+:class:`envconv.errors.EnvconvError`: a missing or damaged file, a layout that does not fit);
+3 an internal error, a bug in envconv (one line naming the exception; set ``ENVCONV_DEBUG=1``
+for the traceback); 130 or 143 when SIGINT or SIGTERM ends a run (:mod:`envconv.interrupt`). Running out of memory is a run-time failure (1). Each
+error is one line on stderr; stdout carries results only.
 """
 
 from __future__ import annotations
@@ -20,7 +23,8 @@ import sys
 import click
 
 from .. import __version__
-from ..errors import EnvconvError
+from ..errors import EnvconvError, UsageError
+from .messages import did_you_mean, one_line, step_typo
 
 __all__ = ["cli", "main", "EnvconvCommand", "COMMANDS"]
 
@@ -79,9 +83,17 @@ class EnvconvCommand(click.Command):
     def make_context(self, info_name, args, parent=None, **extra):
         group = parent.command if parent is not None else None
         if isinstance(group, click.Group) and group.chain:
-            head, tail = _split_chain(self, set(group.list_commands(parent)), list(args))
+            names = group.list_commands(parent)
+            head, tail = _split_chain(self, set(names), list(args))
             extra.update(allow_extra_args=False, allow_interspersed_args=True)
-            ctx = super().make_context(info_name, head, parent=parent, **extra)
+            try:
+                ctx = super().make_context(info_name, list(head), parent=parent, **extra)
+            except click.UsageError:  # `read x.exr resampel --to …`: say so, not "no such option"
+                typo = step_typo(head, names)
+                if typo is None:
+                    raise
+                raise click.UsageError(f"no such command '{typo}'{did_you_mean(typo, names)}",
+                                       ctx=parent) from None  # fmt: skip
             ctx.args = tail
             return ctx
         return super().make_context(info_name, args, parent=parent, **extra)
@@ -102,13 +114,14 @@ class EnvconvGroup(click.Group):
             exc.show()
             sys.exit(exc.exit_code)
         except click.ClickException as exc:
-            lines = [line for line in exc.format_message().splitlines() if line.strip()]
-            message = lines[0] if lines else type(exc).__name__
+            message = one_line(exc.format_message() or type(exc).__name__)
             ctx = getattr(exc, "ctx", None)
             hint = f" (see '{ctx.command_path} --help')" if ctx is not None else ""
             click.echo(f"envconv: error: {message}{hint}", err=True)
             sys.exit(exc.exit_code)
-        except click.exceptions.Abort:
+        except click.exceptions.Abort as exc:
+            if isinstance(exc.__cause__, KeyboardInterrupt):  # a signal while click parsed
+                _interrupted(exc.__cause__)
             click.echo("envconv: aborted", err=True)
             sys.exit(1)
         sys.exit(result if isinstance(result, int) else 0)
@@ -121,7 +134,13 @@ class EnvconvGroup(click.Group):
         return super().get_command(ctx, cmd_name)
 
     def resolve_command(self, ctx, args):
-        name, command, rest = super().resolve_command(ctx, args)
+        try:
+            name, command, rest = super().resolve_command(ctx, args)
+        except click.UsageError as exc:
+            hint = did_you_mean(args[0], COMMANDS) if args and args[0] not in COMMANDS else ""
+            if not hint:
+                raise
+            raise click.UsageError(f"no such command '{args[0]}'{hint}", ctx=ctx) from exc
         if self.chain and command is not None:
             chain = ctx.meta.setdefault("envconv.chain", [])
             chain.append(name)
@@ -138,15 +157,18 @@ class EnvconvGroup(click.Group):
         try:
             return super().invoke(ctx)
         except EnvconvError as exc:
-            click.echo(f"envconv: error: {exc}", err=True)
-            ctx.exit(1)
+            click.echo(f"envconv: error: {one_line(str(exc))}", err=True)
+            ctx.exit(2 if isinstance(exc, UsageError) else 1)
         except (click.exceptions.Exit, click.exceptions.Abort, click.ClickException):
             raise
         except BrokenPipeError:  # `envconv layouts | head`: click exits quietly
             raise
-        except KeyboardInterrupt:
-            click.echo("envconv: interrupted", err=True)
-            ctx.exit(130)
+        except KeyboardInterrupt as exc:  # SIGINT or SIGTERM (envconv.interrupt): 130 or 143
+            _interrupted(exc)
+        except MemoryError as exc:  # not a bug: the machine is too small for this run
+            detail = one_line(str(exc)) if str(exc).strip() else ""
+            click.echo(f"envconv: error: out of memory{': ' + detail if detail else ''}", err=True)
+            ctx.exit(1)
         except Exception as exc:  # never a traceback for the user
             if os.environ.get("ENVCONV_DEBUG"):
                 raise
@@ -176,6 +198,9 @@ def cli(verbose: int, threads: int | None) -> None:
 
     Chained steps: read, rotate, exposure, colorspace, resample, write. Each resample starts
     from the source (the last read and the steps that follow it), never from another output.
+    Before any work a run is refused if an output is an input (also through a link) or two
+    outputs share a path, and with -n (convert, write, run, batch) if an output exists;
+    otherwise outputs are replaced atomically (docs/shell.md).
     Options of envconv itself (-v, --threads) come before the command:
     envconv --threads 1 convert ...
     """
@@ -190,19 +215,27 @@ def cli(verbose: int, threads: int | None) -> None:
         set_threads(threads)
 
 
-@cli.result_callback()
-def compose_steps(results, verbose: int, threads: int | None) -> None:
-    """Run the steps of a chain (standalone commands return None and have already run)."""
-    steps = [r for r in results if r is not None]
-    if steps:
-        from .chain import run_chain
+def _interrupted(exc: BaseException) -> None:
+    from ..interrupt import describe, done, exit_status
 
-        run_chain(steps)
+    if done():  # not yet reported by the watchdog (envconv.interrupt)
+        click.echo(f"envconv: error: {describe(exc)}", err=True)
+    sys.exit(exit_status(exc))
 
 
 def main() -> None:
     """Console-script entry point."""
-    cli.main(prog_name="envconv", standalone_mode=True)
+    import warnings
+
+    from ..interrupt import install
+    from .messages import show_warning
+
+    warnings.showwarning = show_warning  # a Python warning is one line too
+    install()
+    try:
+        cli.main(prog_name="envconv", standalone_mode=True)
+    except KeyboardInterrupt as exc:  # before or after a command ran
+        _interrupted(exc)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -3,7 +3,7 @@
 Each group is a list of click decorators whose parameter names equal the keyword arguments of
 the library function they are passed to: ``READ`` → :func:`envconv.io.read`, ``RESAMPLE`` →
 :func:`envconv.resample.convert`, ``WRITE`` → :func:`envconv.io.write`, ``COLOR`` →
-:func:`envconv.colorflow.prepare_input`. A command splits its
+:func:`envconv.prepare.prepare_input`. A command splits its
 keyword arguments with :func:`split_options`. Layout choices come from the registry.
 """
 
@@ -11,12 +11,15 @@ from __future__ import annotations
 
 import click
 
-from ..layouts import layout_names
+from ..errors import LayoutError
+from ..layouts import layout_names, resolve_layout_name
 from ..resample import FILTERS
 
 __all__ = [
     "refuse_overwrite",
+    "no_clobber_option",
     "layout_choice",
+    "LayoutChoice",
     "read_options",
     "resample_options",
     "write_options",
@@ -29,20 +32,37 @@ __all__ = [
 ]
 
 
+class LayoutChoice(click.Choice):
+    """A layout name: a registered one, any case, or an alias (``equirect``); a typo is
+    answered with the close names, a family word (``cubemap``) with its layouts."""
+
+    def convert(self, value, param, ctx):
+        try:
+            return resolve_layout_name(value)
+        except LayoutError as exc:
+            self.fail(str(exc), param, ctx)
+
+
 def layout_choice() -> click.Choice:
-    return click.Choice(layout_names(), case_sensitive=False)
+    return LayoutChoice(layout_names(), case_sensitive=False)
+
+
+def _checked(check, value):
+    """``check(value)`` (a check of :mod:`envconv.sampling`), its UsageError as click's."""
+    from ..errors import UsageError
+
+    try:
+        return check(value)
+    except UsageError as exc:
+        raise click.BadParameter(str(exc)) from None
 
 
 def parse_samples(ctx, param, value):
     if value is None or value == "auto":
         return "auto"
-    try:
-        number = int(value)
-    except ValueError:
-        raise click.BadParameter(f"expected a positive integer or 'auto', got {value!r}") from None
-    if not 1 <= number <= 64:
-        raise click.BadParameter(f"expected 1..64 or 'auto', got {number}")
-    return number
+    from ..sampling import check_samples
+
+    return _checked(check_samples, value)
 
 
 def parse_guard(ctx, param, value):
@@ -50,13 +70,9 @@ def parse_guard(ctx, param, value):
         return 0
     if value == "fill":
         return "fill"
-    try:
-        number = int(value)
-    except ValueError:
-        raise click.BadParameter(f"expected pixels (an integer) or 'fill', got {value!r}") from None
-    if number < 0:
-        raise click.BadParameter(f"expected a non-negative integer or 'fill', got {number}")
-    return number
+    from ..sampling import check_guard
+
+    return _checked(check_guard, value)
 
 
 def parse_mips(ctx, param, value):
@@ -64,20 +80,11 @@ def parse_mips(ctx, param, value):
     ``--mips ggx`` (``ggx:K``): the GGX-prefiltered chain (``box`` is the default filter)."""
     if value is None:
         return None
-    if value == "all":
-        return True
-    name, _, count = str(value).partition(":")
-    if name in ("ggx", "box"):
-        if count and not (count.isdigit() and int(count) >= 1):
-            raise click.BadParameter(f"expected {name}:K with K >= 1 levels, got {value!r}")
-        return value if name == "ggx" else (int(count) if count else True)
-    try:
-        number = int(value)
-    except ValueError:
-        raise click.BadParameter(f"expected a number of levels or nothing, got {value!r}") from None
-    if number < 1:
-        raise click.BadParameter(f"expected at least 1 level, got {number}")
-    return number
+    from ..sampling import check_mips
+
+    text = str(value)
+    levels, ggx = _checked(check_mips, int(text) if text.isdigit() else text)
+    return text if ggx else levels
 
 
 _OCIO_CONFIG = ("ocio_config", click.option("--ocio-config", "ocio_config", metavar="PATH", help="OpenColorIO config (default: $OCIO, else OCIO's built-in ocio://default)."))
@@ -99,7 +106,7 @@ RESAMPLE = [
     ("rotate", click.option("--rotate", metavar="YAW,PITCH,ROLL", help="Rotate the environment, degrees: about +Y, then +X, then +Z (right-hand rule).")),
     ("alpha", click.option("--alpha", is_flag=True, help="Add an alpha channel: each pixel's coverage of the valid region.")),
     ("guard", click.option("--guard", default=None, callback=parse_guard, metavar="G|fill", help="Guard ring of G pixels around every cell, or 'fill' for the whole image.")),
-    ("in_convention", click.option("--in-convention", "in_convention", metavar="NAME|AXES", help="Convention of the tool that made the input: blender, cmft, skylibs, unity, unreal, ffmpeg, openexr, probe-back, probe-forward, pbrt, ddgi, ddgi-z-up, or an axis remap like -x,z,y; for a {face} input, a skybox face set: quake (source, cube2), unity-6sided, threejs, godot, unreal (found from the file names when omitted; see docs/conventions.md).")),
+    ("in_convention", click.option("--in-convention", "in_convention", metavar="NAME|AXES", help="Convention of the tool that made the input: blender, cmft, skylibs, unity, unreal, threejs, ffmpeg, openexr, probe-back, probe-forward, pbrt, ddgi, ddgi-z-up, or an axis remap like -x,z,y; for a {face} input, a skybox face set: quake (source, cube2), unity-6sided, threejs, godot, unreal (found from the file names when omitted; see docs/conventions.md).")),
     ("out_convention", click.option("--out-convention", "out_convention", metavar="NAME|AXES", help="Convention of the tool that will read the output (same names as --in-convention; with --to cube-faces, a face set names and turns the six files).")),
     ("up", click.option("--up", type=click.Choice(["y", "z"], case_sensitive=False), help="Up axis of the input's world; z turns its +Z into +Y (same as --axes=x,z,-y).")),
     ("axes", click.option("--axes", metavar="AXES", help="Remap the input's axes by a signed permutation: --axes=-x,z,y makes envconv's (x, y, z) the input's (-x, z, y).")),
@@ -116,7 +123,7 @@ WRITE = [
     _OCIO_CONFIG,
 ]  # fmt: skip
 
-#: Options of :func:`envconv.colorflow.prepare_input` (range and NaN/Inf of the source).
+#: Options of :func:`envconv.prepare.prepare_input` (range and NaN/Inf of the source).
 COLOR = [
     ("exposure", click.option("--exposure", type=float, default=0.0, metavar="STOPS", help="Scale colour by 2**STOPS before resampling (e.g. -2 to fit HDR into 8 bits).")),
     ("fix_nonfinite", click.option("--fix-nonfinite", "fix_nonfinite", type=click.Choice(["none", "black", "box3", "error"]), default="none", show_default=True, help="Replace NaN/Inf in the input: with 0, with the mean of finite 3x3 neighbours, or stop.")),
@@ -146,7 +153,7 @@ def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
     """Split a command's keyword arguments into (read, resample, write) keyword dicts.
 
     With ``with_color=True`` a fourth dict holds the ``COLOR`` options (for
-    :func:`envconv.colorflow.prepare_input`). A name in two groups goes to both.
+    :func:`envconv.prepare.prepare_input`). A name in two groups goes to both.
     """
     groups = [{k for k, _ in READ}, {k for k, _ in RESAMPLE}, {k for k, _ in WRITE}]
     if with_color:
@@ -155,10 +162,16 @@ def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
 
 
 def refuse_overwrite(input_path: str, output_path: str) -> None:
-    """Usage error (exit 2) when ``output_path`` is the input, or one file of a ``{face}`` input."""
-    import glob
-    import os
+    """Usage error when ``output_path`` is the input, or one file of a ``{face}`` input, also
+    through a link (the output policy of :mod:`envconv.outputs`)."""
+    from ..errors import UsageError
+    from ..outputs import check_outputs, input_files
 
-    inputs = glob.glob(glob.escape(input_path).replace("{face}", "*")) if "{face}" in input_path else []
-    if os.path.abspath(output_path) in {os.path.abspath(p) for p in [input_path, *inputs]}:
-        raise click.UsageError(f"{output_path} would overwrite the input")
+    try:
+        check_outputs([(output_path, False)], input_files(input_path))
+    except UsageError as exc:
+        raise click.UsageError(str(exc)) from None
+
+
+#: ``-n/--no-clobber`` of convert, write, run and batch (the output policy: envconv.outputs).
+no_clobber_option = click.option("-n", "--no-clobber", "no_clobber", is_flag=True, help="Refuse, before any work, to replace an output that exists (by default it is replaced atomically).")  # fmt: skip

@@ -19,7 +19,9 @@ def run_command(graph_path, **options):
     """Run the pipeline in GRAPH (see docs/pipeline-file.md), once per input it lists.
 
     The file is validated before any work; --dry-run prints every output (layout, size,
-    levels and files) from the inputs' headers, without reading pixels.
+    levels and files) from the inputs' headers, without reading pixels. Also before any work,
+    the run is refused if an output is an input (also through a link), if two outputs share a
+    path, and with -n if an output exists.
 
     \b
     Example:
@@ -27,4 +29,4 @@ def run_command(graph_path, **options):
     """
     graph = load_graph(graph_path)
     inputs = expand_inputs(graph.inputs) if graph.inputs else [None]
-    execute(make_jobs(inputs, graph.pipeline), **options)
+    execute(make_jobs(inputs, graph.pipeline, options.pop("no_clobber")), **options)

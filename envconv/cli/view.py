@@ -27,7 +27,7 @@ def _default_output(input_path: str) -> str:
 @click.option("--cap", type=click.IntRange(16, 4096), default=1024, show_default=True, help="Height cap of the embedded lat-long (width twice this).")
 def view_command(input_path, output_path, open_page, layout, in_convention, input_colorspace, cap):  # fmt: skip
     """Write one HTML page (no network needed to view it) to look around inside INPUT: drag
-    to turn, wheel to zoom, a mirror and a rough ball, exposure, ACES tone curve, horizon grid,
+    to turn, wheel to zoom, a mirror, a GGX rough (roughness slider) and a diffuse ball, exposure, ACES tone curve, horizon grid,
     axis labels and a convention selector that shows the map as that tool would.
 
     \b
@@ -36,7 +36,7 @@ def view_command(input_path, output_path, open_page, layout, in_convention, inpu
       envconv view sky_{face}.png -o sky.html
     """
     from .. import io
-    from ..picture_io import write_page
+    from ..io.picture import write_page
     from ..viewer import build_page
 
     output_path = output_path or _default_output(input_path)

@@ -11,13 +11,19 @@
 namespace envconv {
 
 // Output of the resampler: colour (H, W, C) float32, and optionally the coverage (H, W) float32
-// and the per-pixel sum of sub-sample weights (H, W) float64 (nullptr when not wanted).
+// and the per-pixel sum of sub-sample weights (H, W) float32 (nullptr when not wanted; float32
+// halves the largest array of a mip chain, and keeps 7 digits of a sum accumulated in double).
 struct ResampleOutput {
     float* pixels;
     int64_t height, width, channels;
     float* alpha;
-    double* weights;
+    float* weights;
     bool zeroed;  // every output array already holds zeros: empty cells are left untouched
+    // Floats from one pixel to the next in `pixels` (0: `channels`) and in `alpha` (1: a
+    // plane); with stride channels + 1 and alpha = pixels + channels, the coverage lands in
+    // the channel after the colour ones, so an alpha channel needs no second array.
+    int64_t stride = 0;
+    int64_t alpha_stride = 1;
 };
 
 // A lat-long source's rip-map levels (rip_levels = 0: none), filled in rip_rows rows per pole.
@@ -36,9 +42,10 @@ void resample(const Image& src, const RipMap& rip, const Conversion& cv, int sam
 // Fill rows [0, rows) and [H - rows, H) of the packed rip-map `out` (H, W - W_K, C) from `src`.
 void fill_rips(const Image& src, int levels, int64_t rows, float* out, int threads);
 
-// Weighted means of bx x by blocks: out (h, w, C), weight sums wout, mean coverage aout.
-void reduce_blocks(const Image& src, const double* wsrc, const float* asrc, int64_t bx,
-                   int64_t by, float* out, int64_t height, int64_t width, double* wout,
+// Weighted means of bx x by blocks: out (h, w, C), weight sums wout, mean coverage aout
+// (asrc and aout both nullptr when the coverage is not wanted).
+void reduce_blocks(const Image& src, const float* wsrc, const float* asrc, int64_t bx,
+                   int64_t by, float* out, int64_t height, int64_t width, float* wout,
                    float* aout, int threads);
 
 // Directions of level-0 image points (n, 2); flags 2 valid, 1 guard/fill, 0 no data.

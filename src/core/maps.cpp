@@ -102,8 +102,8 @@ void fill_rips(const Image& src, int levels, int64_t rows, float* out, int threa
     });
 }
 
-void reduce_blocks(const Image& src, const double* wsrc, const float* asrc, int64_t bx,
-                   int64_t by, float* out, int64_t height, int64_t width, double* wout,
+void reduce_blocks(const Image& src, const float* wsrc, const float* asrc, int64_t bx,
+                   int64_t by, float* out, int64_t height, int64_t width, float* wout,
                    float* aout, int threads) {
     const int64_t nch = src.channels, sw = src.width;
     const double inv_area = 1.0 / double(bx * by);
@@ -114,7 +114,7 @@ void reduce_blocks(const Image& src, const double* wsrc, const float* asrc, int6
             double wt = 0.0, at = 0.0;
             for (int64_t y = j * by; y < (j + 1) * by; ++y) {
                 for (int64_t x = i * bx; x < (i + 1) * bx; ++x) {
-                    at += asrc[y * sw + x];
+                    if (asrc) at += asrc[y * sw + x];
                     double w = wsrc[y * sw + x];
                     if (w > 0.0) {
                         wt += w;
@@ -126,8 +126,8 @@ void reduce_blocks(const Image& src, const double* wsrc, const float* asrc, int6
             float* px = out + (j * width + i) * nch;
             double inv = wt > 0.0 ? 1.0 / wt : 0.0;
             for (int64_t c = 0; c < nch; ++c) px[c] = float(acc[c] * inv);
-            aout[j * width + i] = float(at * inv_area);
-            wout[j * width + i] = wt;
+            if (aout) aout[j * width + i] = float(at * inv_area);
+            wout[j * width + i] = float(wt);
         }
     });
 }

@@ -13,6 +13,7 @@
 
 #include "ibl.h"
 #include "kernels.h"
+#include "parallel.h"
 #include "ripmap.h"
 #include "tiles.h"
 
@@ -58,8 +59,8 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
               TableArray d_cell_face, TableArray d_cell_turns, TableArray d_face_cell,
               double scale_x, double scale_y, int samples, int filter,
               Array<const double, nb::shape<3, 3>> rot, bool fill, Array<float, nb::ndim<3>> out,
-              Array<float, nb::ndim<2>> alpha, Array<double, nb::ndim<2>> weights, int threads,
-              Array<int64_t, nb::shape<1>> progress, bool zeroed) {
+              Array<float, nb::ndim<2>> alpha, Array<float, nb::ndim<2>> weights, int threads,
+              Array<int64_t, nb::shape<1>> progress, bool zeroed, bool coverage_channel) {
     envconv::Conversion cv;
     cv.src = make_geometry(sgeo, s_cell_face, s_cell_turns, s_face_cell);
     cv.dst = make_geometry(dgeo, d_cell_face, d_cell_turns, d_face_cell);
@@ -67,7 +68,8 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
     cv.scale_x = scale_x;
     cv.scale_y = scale_y;
     cv.fill = fill;
-    int64_t height = out.shape(0), width = out.shape(1), nch = out.shape(2);
+    // coverage_channel: `out` has one channel more than `src`, which receives the coverage.
+    int64_t height = out.shape(0), width = out.shape(1), nch = out.shape(2) - coverage_channel;
     auto sw = cv.src.columns * cv.src.cell_width(), sh = cv.src.rows * cv.src.cell_height();
     if (int64_t(src.shape(0)) != sh || int64_t(src.shape(1)) != sw)
         throw std::invalid_argument("source array does not match its layout's size");
@@ -76,6 +78,8 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
     if (filter < envconv::kNearest || filter > envconv::kBicubic)
         throw std::invalid_argument("unknown filter code");
     bool has_alpha = alpha.is_valid(), has_weights = weights.is_valid();
+    if (coverage_channel && (has_alpha || nch < 1))
+        throw std::invalid_argument("coverage goes to the output's last channel or to alpha");
     if ((has_alpha && (int64_t(alpha.shape(0)) != height || int64_t(alpha.shape(1)) != width)) ||
         (has_weights &&
          (int64_t(weights.shape(0)) != height || int64_t(weights.shape(1)) != width)))
@@ -86,6 +90,10 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
     envconv::ResampleOutput o{out.data(), height, width, nch,
                               has_alpha ? alpha.data() : nullptr,
                               has_weights ? weights.data() : nullptr, zeroed};
+    if (coverage_channel) {
+        o.stride = o.alpha_stride = nch + 1;
+        o.alpha = out.data() + nch;
+    }
     envconv::Image image = make_image(src);
     int64_t* counter = progress.is_valid() ? progress.data() : nullptr;
     nb::gil_scoped_release release;
@@ -103,22 +111,25 @@ void fill_rips(Array<const float, nb::ndim<3>> src, int levels, int64_t rows,
     envconv::fill_rips(image, levels, std::max<int64_t>(0, rows), out.data(), threads);
 }
 
-void reduce_blocks(Array<const float, nb::ndim<3>> src, Array<const double, nb::ndim<2>> wsrc,
+void reduce_blocks(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<2>> wsrc,
                    Array<const float, nb::ndim<2>> asrc, int64_t bx, int64_t by,
-                   Array<float, nb::ndim<3>> out, Array<double, nb::ndim<2>> wout,
+                   Array<float, nb::ndim<3>> out, Array<float, nb::ndim<2>> wout,
                    Array<float, nb::ndim<2>> aout, int threads) {
     int64_t height = out.shape(0), width = out.shape(1);
     if (bx < 1 || by < 1 || int64_t(src.shape(0)) < height * by ||
         int64_t(src.shape(1)) < width * bx || src.shape(2) != out.shape(2) ||
         wsrc.shape(0) != src.shape(0) || wsrc.shape(1) != src.shape(1) ||
-        asrc.shape(0) != src.shape(0) || asrc.shape(1) != src.shape(1) ||
         int64_t(wout.shape(0)) != height || int64_t(wout.shape(1)) != width ||
-        int64_t(aout.shape(0)) != height || int64_t(aout.shape(1)) != width)
+        asrc.is_valid() != aout.is_valid() ||
+        (asrc.is_valid() && (asrc.shape(0) != src.shape(0) || asrc.shape(1) != src.shape(1) ||
+                             int64_t(aout.shape(0)) != height || int64_t(aout.shape(1)) != width)))
         throw std::invalid_argument("block reduction arrays have mismatched shapes");
     envconv::Image image = make_image(src);
+    const float* coverage = asrc.is_valid() ? asrc.data() : nullptr;
+    float* coverage_out = aout.is_valid() ? aout.data() : nullptr;
     nb::gil_scoped_release release;
-    envconv::reduce_blocks(image, wsrc.data(), asrc.data(), bx, by, out.data(), height, width,
-                           wout.data(), aout.data(), threads);
+    envconv::reduce_blocks(image, wsrc.data(), coverage, bx, by, out.data(), height, width,
+                           wout.data(), coverage_out, threads);
 }
 
 void map_points_to_dirs(GeoArray geo, TableArray cell_face, TableArray cell_turns,
@@ -294,10 +305,10 @@ NB_MODULE(_core, m) {
           "s_cell_face"_a, "s_cell_turns"_a, "s_face_cell"_a, "dgeo"_a, "d_cell_face"_a,
           "d_cell_turns"_a, "d_face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "filter"_a,
           "rot"_a, "fill"_a, "out"_a, "alpha"_a.none(), "weights"_a.none(), "threads"_a,
-          "progress"_a.none() = nb::none(), "zeroed"_a = false);
+          "progress"_a.none() = nb::none(), "zeroed"_a = false, "coverage_channel"_a = false);
     m.def("fill_rips", &fill_rips, "src"_a, "levels"_a, "rows"_a, "out"_a, "threads"_a);
-    m.def("reduce_blocks", &reduce_blocks, "src"_a, "wsrc"_a, "asrc"_a, "bx"_a, "by"_a, "out"_a,
-          "wout"_a, "aout"_a, "threads"_a);
+    m.def("reduce_blocks", &reduce_blocks, "src"_a, "wsrc"_a, "asrc"_a.none(), "bx"_a, "by"_a,
+          "out"_a, "wout"_a, "aout"_a.none(), "threads"_a);
     m.def("map_points_to_dirs", &map_points_to_dirs, "geo"_a, "cell_face"_a, "cell_turns"_a,
           "face_cell"_a, "points"_a, "fill"_a, "dirs"_a, "flags"_a, "threads"_a);
     m.def("map_dirs_to_points", &map_dirs_to_points, "geo"_a, "cell_face"_a, "cell_turns"_a,
@@ -318,6 +329,8 @@ NB_MODULE(_core, m) {
           "samples"_a, "rot"_a, "fill"_a, "tau"_a, "out"_a, "threads"_a);
     m.def("sh_project", &sh_project, "image"_a, "geo"_a, "cell_face"_a, "cell_turns"_a,
           "face_cell"_a, "samples"_a, "sign_x"_a, "out"_a, "threads"_a);
+    // Stop (true) every running kernel at its next task, or let kernels run again (false).
+    m.def("cancel", [](bool on) { envconv::cancel_requested.store(on); }, "on"_a);
     m.attr("IBL_NODE_FIELDS") = envconv::Pyramid::kFields;
     m.attr("TILE") = envconv::kTile;  // output rows per band: the progress counter's unit
     m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;

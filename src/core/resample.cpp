@@ -66,11 +66,11 @@ template <int NCH = 0>
 void store(const ResampleOutput& out, int64_t j, int64_t i, const double* acc, double wsum,
            double coverage) {
     const int64_t nch = NCH ? NCH : out.channels;
-    float* px = out.pixels + (j * out.width + i) * nch;
+    float* px = out.pixels + (j * out.width + i) * (out.stride ? out.stride : nch);
     double inv = wsum > 0.0 ? 1.0 / wsum : 0.0;
     for (int64_t c = 0; c < nch; ++c) px[c] = wsum > 0.0 ? float(acc[c] * inv) : 0.0f;
-    if (out.alpha) out.alpha[j * out.width + i] = float(coverage);
-    if (out.weights) out.weights[j * out.width + i] = wsum;
+    if (out.alpha) out.alpha[(j * out.width + i) * out.alpha_stride] = float(coverage);
+    if (out.weights) out.weights[j * out.width + i] = float(wsum);
 }
 
 // Accumulate output pixel (i, j) mapping its nx x ny sub-samples exactly. With level >= 1

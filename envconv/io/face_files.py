@@ -15,11 +15,11 @@ from __future__ import annotations
 import os
 from typing import NamedTuple
 
-from .errors import ImageIOError, LayoutError
-from .facesets import FACE_SETS, FaceSet, get_face_set
-from .layouts import get_layout
+from ..errors import ImageIOError, LayoutError
+from ..facesets import FACE_SETS, FaceSet, get_face_set
+from ..layouts import get_layout
 
-__all__ = ["FaceFiles", "find_face_files", "part_path"]
+__all__ = ["FaceFiles", "find_face_files", "part_path", "first_file", "files_of"]
 
 _CUBE = "cube-faces"
 _PARABOLOID = "paraboloid-split"
@@ -138,3 +138,17 @@ def _missing_message(template: str, partial) -> str:
         return f"{template}: the {cand.label} face files are incomplete: no {missing}"
     sets = "; ".join(f"{c.label}: {' '.join(c.names)}" for _, c, _ in partial)
     return f"no files match {template} (face names tried: {sets})"
+
+
+def files_of(path: str | os.PathLike, layout: str | None = None, faces=None) -> list[str]:
+    """The files a (possibly ``{face}``) input path stands for: itself, or every file of the
+    face set :func:`find_face_files` finds (the one home of that rule)."""
+    path = os.fspath(path)
+    if "{face}" not in path:
+        return [path]
+    return list(find_face_files(path, layout, faces).paths)
+
+
+def first_file(path: str | os.PathLike, layout: str | None = None, faces=None) -> str:
+    """The file whose header stands for a (possibly ``{face}``) input path."""
+    return files_of(path, layout, faces)[0]

@@ -2,15 +2,15 @@
 
 Formats: OpenEXR (half or float), Radiance HDR, TIFF, PNG and JPEG, chosen by the file
 extension. Pixels are always float32 in memory, in scene-linear Rec.709: :func:`read` and
-:func:`write` convert colour, range and bit depth through :mod:`envconv.colorflow`.
+:func:`write` convert colour, range and bit depth through :mod:`envconv.color` and :mod:`envconv.io.encode`.
 
 Multi-file layouts (cube-faces, paraboloid-split) name their parts with ``{face}`` in the path:
 px nx py ny pz nz, or front back. ``faces=`` names another program's skybox files and face
 orientations (Quake's ft bk lf rt up dn, Unity's Front …: :mod:`envconv.facesets`); reading
 finds the set from the files that exist when it is not given (:mod:`envconv.face_files`).
 
-This module reads maps (files through :mod:`envconv.file_io`); writing lives in
-:mod:`envconv.io_write` (every output goes to a temporary file renamed into place, so a failure
+This module reads maps (files through :mod:`envconv.io.files`); writing lives in
+:mod:`envconv.io.writer` (every output goes to a temporary file renamed into place, so a failure
 never leaves a partial file, and inputs are never opened for writing) and is re-exported here.
 """
 
@@ -22,10 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from .detect import place_image
-from .envmap import EnvMap
-from .errors import ImageIOError, LayoutError
-from .file_io import (
+from ..detect import place_image
+from ..envmap import EnvMap
+from ..errors import ImageIOError, LayoutError
+from ..layouts import get_layout
+from .files import (
     FileHeader,
     _open_input,
     read_file,
@@ -33,12 +34,9 @@ from .file_io import (
     read_image,
     read_pixel_type,
 )
-from .formats import FORMATS, WRITE_FORMATS, choose_pixel_type
-from .io_write import output_paths, write
-from .layouts import get_layout
 
-__all__ = ["read", "read_unplaced", "write", "read_image", "read_header", "read_pixel_type",
-           "choose_pixel_type", "output_paths", "mip_levels", "FORMATS", "WRITE_FORMATS"]  # fmt: skip
+__all__ = ["read", "read_unplaced", "read_image", "read_header", "read_pixel_type", "mip_levels",
+           "resample_edge_aligned"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -77,21 +75,21 @@ def read(
         OpenColorIO config; default ``$OCIO``, else ``ocio://default``.
     part : str, optional
         Part of a multi-part file to read alone (its name, or its index); default every part
-        that is an image of the first part's windows (see :mod:`envconv.file_io`).
+        that is an image of the first part's windows (see :mod:`envconv.io.files`).
     faces : str, optional
         Face set of a ``{face}`` path of six skybox files (``quake``, ``unity-6sided``,
         ``threejs``, ``godot``, ``unreal``, ``envconv``; see :mod:`envconv.facesets`). Each
         file is turned into envconv's face, so the result is an ordinary ``cube-faces`` map.
         Default: found from the file names; several matching sets are a LayoutError.
 
-    The map is the file's display window (:mod:`envconv.file_io`). Where the data window
+    The map is the file's display window (:mod:`envconv.io.files`). Where the data window
     leaves holes, every channel is 0 there, an alpha channel ``A`` (1 elsewhere) is added
     when the file has none, and ``EnvMap.valid`` marks them. Pixels are converted to linear
-    Rec.709 by :func:`envconv.colorflow.to_working`. A lat-long stored with edge-aligned
+    Rec.709 by :func:`envconv.color.to_working`. A lat-long stored with edge-aligned
     samples (``oiio:sampleborder``, as OpenEXR envmaps written by other tools) is resampled
-    onto pixel centres (:func:`envconv.colorflow.resample_edge_aligned`).
+    onto pixel centres (:func:`resample_edge_aligned`).
     """
-    from .colorflow import to_working
+    from ..color import to_working
 
     path = os.fspath(path)
     if "{face}" in path:
@@ -101,6 +99,7 @@ def read(
         raise LayoutError(f"a face set ({faces}) needs {{face}} in the path, e.g. sky_{{face}}.hdr")
     if layout is not None and get_layout(layout).multi_file:
         raise LayoutError(f"layout {layout} is stored as several files; put {{face}} in the path")
+    _check_memory(path, level, part)
     image = read_file(path, level, part)
     header = image.header
     pixels, channels, parts = _with_alpha(image.pixels, header, image.valid)
@@ -108,14 +107,27 @@ def read(
     found, guard, _ = place_image(header.width, header.height, metadata, layout, pixels, level)
     if found.name == "latlong" and metadata.get("oiio:sampleborder") and (
         "envconv:layout" not in metadata  # envconv's own files use pixel centres
-    ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see colorflow.resample_edge_aligned
-        from .colorflow import resample_edge_aligned
+    ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see resample_edge_aligned
 
         pixels = resample_edge_aligned(pixels)
         valid = None if valid is None else resample_edge_aligned(valid[:, :, None])[:, :, 0]
     envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata),
                     header.pixel_type, valid=valid, parts=parts)  # fmt: skip
     return to_working(envmap, input_colorspace, ocio_config)
+
+
+def _check_memory(path: str, level: int, part, files: int = 1) -> None:
+    """Refuse, from the header and before any pixel is read, an image (or ``files`` images of
+    one size, placed side by side) whose reading cannot fit in memory (:mod:`envconv.memory`)."""
+    from .. import memory
+
+    header = read_file_header(path, level, part)
+    holes = header.holes
+    channels = len(header.channels) + int(holes and not any(_is_alpha(c) for c in header.channels))
+    need = memory.estimate_read(header.width, header.height, channels, header.pixel_type, holes)
+    if files > 1:  # every file's image, then the mosaic they are joined into
+        need = 2 * files * (need - memory.SLACK) + memory.SLACK
+    memory.check(need, f"reading {path}", 0, "read a lower --level or a smaller file, or free memory")
 
 
 def _with_alpha(pixels: np.ndarray, header: FileHeader, valid: np.ndarray | None):
@@ -163,6 +175,7 @@ def _read_multi(template: str, layout: str | None, level: int, part: str | None,
 
     files = find_face_files(template, layout, faces)
     found = get_layout(files.layout)
+    _check_memory(files.paths[0], level, part, len(files.paths))
     images = [read_file(path, level, part) for path in files.paths]
     holes = any(image.valid is not None for image in images)
     cells = []
@@ -176,7 +189,7 @@ def _read_multi(template: str, layout: str | None, level: int, part: str | None,
     pixels = [c[0] for c in cells]
     valids = [c[3] for c in cells]
     if files.face_set is not None:
-        from .facesets import to_envconv
+        from ..facesets import to_envconv
 
         pixels = to_envconv(files.face_set, pixels)
         if holes:
@@ -195,11 +208,9 @@ def mip_levels(path: str | os.PathLike, part: str | None = None) -> list[tuple[i
 
     Multi-file layouts (``{face}`` in the path) report the levels of their first file.
     """
-    path = os.fspath(path)
-    if "{face}" in path:
-        from .face_files import find_face_files
+    from .face_files import first_file
 
-        path = find_face_files(path).paths[0]
+    path = first_file(path)
     index = read_file_header(path, 0, part).chosen[0]
     with _open_input(path) as inp:
         sizes: list[tuple[int, int]] = []
@@ -215,3 +226,48 @@ def _content_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
         for k, v in metadata.items()
         if k in _KEEP_NAMES or (not k.startswith(_DROP_PREFIXES) and k not in _DROP_NAMES)
     }
+
+
+def _edge_weights(n: int) -> tuple[np.ndarray, np.ndarray]:
+    """For centre k of n: left sample index and weight of the right one, on an edge grid."""
+    x = (np.arange(n, dtype=np.float64) + 0.5) * (n - 1) / n
+    i0 = np.minimum(np.floor(x).astype(np.intp), n - 2)
+    return i0, (x - i0).astype(np.float32)
+
+def resample_edge_aligned(pixels: np.ndarray) -> np.ndarray:
+    """Resample an image with edge-aligned samples onto the pixel-centre grid, same size.
+
+    In a file with ``oiio:sampleborder`` = 1 (what OIIO reports for every OpenEXR with an
+    ``envmap`` attribute, after OpenEXR's ``ImfEnvmap``), sample (i, j) of a W × H image sits
+    at u = i / (W − 1), v = j / (H − 1): the first and last columns both lie on the seam
+    (lon = ±π) and the first and last rows on the poles. envconv's pixel (i, j) has its
+    centre at ((i + 0.5) / W, (j + 0.5) / H), i.e. at file position (i + 0.5)(W − 1)/W.
+    Each output value is the linear interpolation of the two nearest file samples, rows and
+    columns separably (exact for constants and for functions linear in u and v). An axis of
+    one sample is left as it is.
+
+    Parameters
+    ----------
+    pixels : ndarray, shape (H, W, C)
+
+    Returns
+    -------
+    ndarray of float32, shape (H, W, C)
+
+    Examples
+    --------
+    >>> px = np.arange(3, dtype=np.float32).reshape(1, 3, 1) * np.ones((2, 1, 1), np.float32)
+    >>> [round(float(x), 4) for x in resample_edge_aligned(px)[0, :, 0]]  # u = 1/6, 1/2, 5/6
+    [0.3333, 1.0, 1.6667]
+    """
+    out = np.asarray(pixels, np.float32)
+    height, width = out.shape[:2]
+    if height > 1:
+        j0, t = _edge_weights(height)
+        t = t[:, None, None]
+        out = out[j0] * (1 - t) + out[j0 + 1] * t
+    if width > 1:
+        i0, t = _edge_weights(width)
+        t = t[None, :, None]
+        out = out[:, i0] * (1 - t) + out[:, i0 + 1] * t
+    return np.ascontiguousarray(out, np.float32)

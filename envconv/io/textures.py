@@ -15,10 +15,10 @@ import logging
 
 import numpy as np
 
-from .errors import ImageIOError
+from ..errors import ImageIOError
+from ..layouts import Layout
+from ..layouts.base import FAMILY_CUBE_GL
 from .formats import CONTAINER_FORMATS  # the table lives with the other formats'
-from .layouts import Layout
-from .layouts.base import FAMILY_CUBE_GL
 
 __all__ = ["CONTAINER_FORMATS", "cube_faces", "texture_images", "encode_texture"]
 

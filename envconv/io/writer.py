@@ -3,7 +3,7 @@
 Every output is written to a temporary file in the destination directory and renamed into place,
 so a failure never leaves a partial file, and inputs are never opened for writing. Pixels are
 converted from the working space to the output's colour space, range and bit depth by
-:func:`envconv.colorflow.encode_output`.
+:func:`envconv.io.encode.encode_output`.
 """
 
 from __future__ import annotations
@@ -15,11 +15,14 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .envmap import EnvMap
-from .errors import ImageIOError, LayoutError
-from .file_io import _first_line, _oiio
+from ..envmap import EnvMap
+from ..errors import ImageIOError, LayoutError
+from ..layouts import get_layout
+from .chatter import library_output
+from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
-from .layouts import get_layout
+from .temps import discard as _discard
+from .temps import temp_for as _temp_path
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
 
@@ -70,7 +73,7 @@ def _face_names(layout, faces) -> tuple[str, ...]:
     """File-name parts of a layout's faces, or of a face set's files (cube-faces only)."""
     if faces is None:
         return layout.face_names
-    from .facesets import get_face_set
+    from ..facesets import get_face_set
 
     face_set = get_face_set(faces)
     if layout.name != "cube-faces":
@@ -95,7 +98,7 @@ def write(
     Colour is converted from the map's ``oiio:ColorSpace`` to ``output_colorspace`` (default:
     linear Rec.709 for float/half, sRGB for integer types), then clipped and quantized, 8-bit
     with deterministic dither unless ``dither=False``; ``compression`` is checked against
-    :data:`envconv.colorflow.COMPRESSIONS` (see :func:`envconv.colorflow.encode_output`).
+    :data:`envconv.io.formats.COMPRESSIONS` (see :func:`envconv.io.encode.encode_output`).
     Clipping warnings are appended to ``warnings`` when it is a list, else logged.
     Metadata is carried over, plus ``envconv:layout``, ``envconv:size``, ``envconv:guard``,
     ``envconv:version`` and, for unguarded latlong and cube-exr EXRs, OpenEXR's ``envmap``.
@@ -107,16 +110,14 @@ def write(
     :mod:`envconv.facesets`). A ``.dds`` or ``.ktx2`` path gets a texture container with every
     level (:mod:`envconv.textures`). Returns the paths written.
     """
-    from .colorflow import encode_output
+    from .encode import encode_output
 
     _check_parts(envmap, os.fspath(path))
+    # One file per level (not cells of a mosaic nor parts): encoded a band at a time as written.
+    lazy = not envmap.layout.multi_file and not envmap.parts
     encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
-                            compression)  # fmt: skip
-    for message in encoded.warnings:
-        if warnings is None:
-            log.warning("%s", message)
-        else:
-            warnings.append(message)
+                            compression, lazy)  # fmt: skip
+    _report(encoded.warnings, warnings)
     levels, bit_depth, compression = encoded.levels, encoded.plan.pixel_type, encoded.plan.compression
     envmap = replace(envmap, metadata=encoded.metadata, levels=None)
     if encoded.plan.format in ("dds", "ktx2"):
@@ -130,19 +131,28 @@ def write(
         jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
     else:
         jobs = [([cell[f] for cell in cells], None, names[f]) for f in range(len(names))]
-    temps: list[tuple[str, str]] = []
+    written: list[tuple[str, str]] = []
     try:
         for target, (images, level, face) in zip(paths, jobs, strict=True):
             temp = _temp_path(target)
-            temps.append((temp, target))
+            written.append((temp, target))
             _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
-        for temp, target in temps:
+        for temp, target in written:
             os.replace(temp, target)
+        _report(encoded.finish(), warnings)
     finally:
-        for temp, _ in temps:
-            if os.path.exists(temp):
-                os.remove(temp)
+        for temp, _ in written:
+            _discard(temp)
     return paths
+
+
+def _report(messages: list[str], warnings: list[str] | None) -> None:
+    """Append ``messages`` to ``warnings``, or log them when it is None."""
+    for message in messages:
+        if warnings is None:
+            log.warning("%s", message)
+        else:
+            warnings.append(message)
 
 
 def _check_parts(envmap: EnvMap, path: str) -> None:
@@ -162,7 +172,7 @@ def _check_parts(envmap: EnvMap, path: str) -> None:
 
 def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarray]) -> str:
     """Write a DDS or KTX2 file (:mod:`envconv.textures`) through a temporary file."""
-    from . import __version__
+    from .. import __version__
     from .textures import encode_texture, texture_images
 
     output_paths(envmap.layout, path)
@@ -186,8 +196,7 @@ def write_bytes(data: bytes, path: str) -> str:
     except OSError as exc:
         raise ImageIOError(f"cannot write {path}: {exc.strerror or exc}") from None
     finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+        _discard(temp)
     return path
 
 
@@ -200,17 +209,9 @@ def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
     cells = [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
     if faces is None:
         return cells
-    from .facesets import from_envconv
+    from ..facesets import from_envconv
 
     return from_envconv(faces, cells)
-
-
-def _temp_path(target: str) -> str:
-    directory, name = os.path.split(os.path.abspath(target))
-    if not os.path.isdir(directory):
-        raise ImageIOError(f"cannot write {target}: directory {directory} does not exist")
-    stem, ext = os.path.splitext(name)
-    return os.path.join(directory, f".{stem}.envconv-{os.getpid()}.tmp{ext}")
 
 
 def _write_one(temp, target, images, envmap, face, bit_depth, compression, level=None) -> None:
@@ -218,7 +219,9 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
     with parts is written as a multi-part OpenEXR file, one part per entry of ``parts``."""
     fmt = format_of(target)[0]
     if len(images) > 1:
-        full = max(images[0].shape[:2]).bit_length()
+        from ..mips import full_level_count
+
+        full = full_level_count(images[0].shape[1], images[0].shape[0])
         if fmt not in ("openexr", "tiff"):
             raise ImageIOError(
                 f"cannot write {target}: {fmt} holds one image, not {len(images)} MIP levels; "
@@ -261,7 +264,12 @@ def _part_writes(target, pixels, envmap, face, bit_depth, compression, level):
 
 def _run_writes(temp, target, writes) -> None:
     """Open ``temp`` and write each (spec or list of specs, mode, data) in turn; one-line
-    errors naming ``target``."""
+    errors naming ``target``, with what the libraries printed folded in (:mod:`.chatter`)."""
+    with library_output(f"cannot write {target}", temp):
+        _write_all(temp, target, writes)
+
+
+def _write_all(temp, target, writes) -> None:
     oiio = _oiio()
     out = oiio.ImageOutput.create(temp)
     if out is None:
@@ -270,15 +278,55 @@ def _run_writes(temp, target, writes) -> None:
         for spec, mode, data in writes:
             opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
             if not opened:
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
-            if not out.write_image(data):
-                raise ImageIOError(f"cannot write {target}: {_first_line(out.geterror())}")
+                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
+            if not _write_pixels(out, data):
+                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
     finally:
         ok = out.close()
         message = out.geterror()
         del out  # release (and flush) the file before it is renamed into place
         if not ok:
-            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
+            raise ImageIOError(f"cannot write {target}: {_error(message, temp, target)}")
+
+
+def _error(message: str, temp: str, target: str) -> str:
+    """The first line of a library's error, naming the target rather than its temp file."""
+    return _first_line(message).replace(temp, target)
+
+
+#: Bytes of pixels handed to OIIO per call. One whole-image ``write_image`` made OIIO's PNG
+#: writer hold about nine times the image (docs/memory.md); bands of rows cost one band.
+WRITE_BAND_BYTES = 1 << 24
+
+
+def _write_pixels(out, data) -> bool:
+    """Write one image's pixels (H, W, C: an array or an :class:`envconv.io.encode.LazyLevel`)
+    to the open ``out`` in bands of rows (scanline files) or of rows of tiles (tiled files);
+    False on a write error (``out.geterror()``).
+
+    Tiled files (MIP levels) go through ``write_tiles``, never ``write_image``: OpenImageIO's
+    ``write_image`` hands the tiles of a tiled file to its thread pool and, when a write fails
+    (a full disk: ENOSPC, EFBIG), waits forever for a task that has given up, with SIGINT
+    ignored. ``write_tiles`` writes in this thread and returns False.
+    """
+    spec = out.spec()
+    height = data.shape[0]
+    lazy = hasattr(data, "rows")  # an encode.LazyLevel: encoded here, band by band
+    rows = max(1, WRITE_BAND_BYTES // max(1, data.shape[1] * data.shape[2] * data.itemsize))
+    rows = data.band_rows if lazy else rows
+    if spec.tile_width:
+        rows = max(spec.tile_height, rows // spec.tile_height * spec.tile_height)
+    for y0 in range(0, height, rows):
+        band = data.rows(y0, min(height, y0 + rows)) if lazy else data[y0 : y0 + rows]
+        y1 = spec.y + y0 + band.shape[0]
+        if spec.tile_width:
+            done = out.write_tiles(spec.x, spec.x + spec.width, spec.y + y0, y1, spec.z,
+                                   spec.z + max(spec.depth, 1), band)  # fmt: skip
+        else:
+            done = out.write_scanlines(spec.y + y0, y1, spec.z, band)
+        if not done:
+            return False
+    return True
 
 
 def _int_tag(fmt: str, value: int):
@@ -301,7 +349,7 @@ class LevelImage(NamedTuple):
 
     ``attributes`` are the (name, value) pairs its OIIO ImageSpec gets, in that order (see
     :func:`_image_spec`); ``data`` is (H, W, C) float32 holding the values to store (codes,
-    half or float, from :func:`envconv.colorflow.encode_output`)."""
+    half or float, from :func:`envconv.io.encode.encode_output`)."""
 
     format: str
     channels: tuple[str, ...]
@@ -325,10 +373,10 @@ def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, l
             max_channels,
             ",".join(channels[:max_channels]),
         )
-        pixels = pixels[:, :, :max_channels]
+        pixels = _take(pixels, range(max_channels))
         channels = channels[:max_channels]
     if fmt == "hdr" and len(channels) != 3:
-        pixels = np.repeat(pixels[:, :, :1], 3, axis=2)
+        pixels = _take(pixels, [0, 0, 0])
         channels = ["R", "G", "B"]
     nch = pixels.shape[2]
     alpha = next((k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None)
@@ -343,7 +391,14 @@ def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, l
         attributes.append(("compression", compression))
     if level is not None:
         attributes.append(("envconv:level", _int_tag(fmt, level)))
-    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, np.ascontiguousarray(pixels))
+    data = pixels if hasattr(pixels, "rows") else np.ascontiguousarray(pixels)
+    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, data)
+
+
+def _take(pixels, channels):
+    """``pixels[:, :, channels]`` of an array or of a lazily encoded level."""
+    channels = list(channels)
+    return pixels.take(channels) if hasattr(pixels, "rows") else pixels[:, :, channels]
 
 
 def _image_spec(image: LevelImage):
@@ -367,7 +422,7 @@ _DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
 def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str, Any]]:
     """The attributes that tag a file as envconv's: layout, size, guard, version, face, and
     OpenEXR's envmap (through OIIO's ``textureformat``)."""
-    from . import __version__
+    from .. import __version__
 
     tags: list[tuple[str, Any]] = []
     if fmt in _DESCRIPTION_FORMATS:
@@ -387,6 +442,9 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
     ]
     if face is not None:
         tags.append(("envconv:face", face))
+    stamp = _source_date()
+    if stamp is not None and "DateTime" not in envmap.metadata:
+        tags.append(("DateTime", stamp))
     if fmt == "openexr" and envmap.guard == 0:
         # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
         # "envmap" string would be stored with the wrong type and make the file unreadable.
@@ -395,6 +453,18 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
         elif envmap.layout.name == "cube-exr":
             tags.append(("textureformat", "CubeFace Environment"))
     return tags
+
+
+def _source_date() -> str | None:
+    """``DateTime`` from ``SOURCE_DATE_EPOCH`` (reproducible builds: the same inputs give the
+    same bytes, whenever and however often they are written), else None: OpenImageIO stamps
+    the time of writing."""
+    value = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
+    if not value.isdigit():
+        return None
+    import time
+
+    return time.strftime("%Y:%m:%d %H:%M:%S", time.gmtime(int(value)))
 
 
 def _set_attribute(spec, name: str, value: Any) -> None:

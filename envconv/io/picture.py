@@ -11,9 +11,11 @@ import os
 
 import numpy as np
 
-from .errors import ImageIOError
-from .file_io import _first_line, _oiio
-from .io_write import _temp_path, write_bytes
+from ..errors import ImageIOError
+from .chatter import library_output
+from .files import _first_line, _oiio
+from .temps import discard, temp_for
+from .writer import write_bytes
 
 __all__ = ["write_picture", "write_page"]
 
@@ -27,24 +29,24 @@ def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
     """
     target = os.fspath(path)
     data = np.ascontiguousarray(pixels, dtype=np.uint8)
-    temp = _temp_path(target)
     oiio = _oiio()
     out = oiio.ImageOutput.create(target)
     if out is None:
         raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
+    temp = temp_for(target)
     spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], "uint8")
     spec.attribute("oiio:ColorSpace", "srgb_display")
     try:
-        ok = out.open(temp, spec) and out.write_image(data)
-        message = out.geterror()
-        ok = out.close() and ok
-        del out
+        with library_output(f"cannot write {target}", temp):  # what libpng/libjpeg print
+            ok = out.open(temp, spec) and out.write_image(data)
+            message = out.geterror()
+            ok = out.close() and ok
+            del out
         if not ok:
             raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
         os.replace(temp, target)
     finally:
-        if os.path.exists(temp):
-            os.remove(temp)
+        discard(temp)
     return target
 
 

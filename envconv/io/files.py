@@ -31,9 +31,10 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from .errors import ImageIOError
-from .exr_io import is_plain_exr as _plain_exr
-from .exr_io import read_exr_pixels as _read_exr_pixels
+from ..errors import ImageIOError
+from .chatter import library_output
+from .exr import is_plain_exr as _plain_exr
+from .exr import read_exr_pixels as _read_exr_pixels
 from .formats import FORMATS
 
 __all__ = ["read_file", "read_file_header", "read_image", "read_header", "read_pixel_type",
@@ -141,19 +142,23 @@ class FileImage(NamedTuple):
 
 @contextmanager
 def _open_input(path: str, config=None):
-    """An open OIIO ImageInput for ``path`` (closed on exit); one-line errors otherwise."""
+    """An open OIIO ImageInput for ``path`` (closed on exit); one-line errors otherwise.
+
+    While it is open, what the libraries print is captured (:mod:`envconv.io.chatter`): folded
+    into an error raised in the block, logged at debug level otherwise."""
     oiio = _oiio()
     if not os.path.exists(path):
         raise ImageIOError(f"input file not found: {path}")
     if os.path.isdir(path):
         raise ImageIOError(f"input is a directory, not an image: {path}")
-    inp = oiio.ImageInput.open(path) if config is None else oiio.ImageInput.open(path, config)
-    if inp is None:
-        raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
-    try:
-        yield inp
-    finally:
-        inp.close()
+    with library_output(f"cannot read {path}", path):
+        inp = oiio.ImageInput.open(path) if config is None else oiio.ImageInput.open(path, config)
+        if inp is None:
+            raise ImageIOError(f"cannot read {path}: {_first_line(oiio.geterror())}")
+        try:
+            yield inp
+        finally:
+            inp.close()
 
 
 def _part(spec, index: int) -> Part:

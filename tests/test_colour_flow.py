@@ -1,4 +1,4 @@
-"""Colour flow through reading, resampling and writing (envconv.colorflow, io, CLI).
+"""Colour flow through reading, resampling and writing (envconv.color, envconv.prepare, envconv.io.encode, the CLI).
 
 Truth comes from outside the code under test: integer codes chosen by the test, OCIO
 processors built here with PyOpenColorIO, the sRGB formulas of IEC 61966-2-1, hand counts
@@ -13,8 +13,9 @@ import PyOpenColorIO as ocio
 import pytest
 from conftest import run_cli, stderr_lines, write_plain
 
-from envconv import colorflow, io
+from envconv import color, io, quantize
 from envconv.envmap import EnvMap
+from envconv.io import encode, formats, reader
 
 H, W = 16, 32  # a lat-long of N = 16; latlong -> latlong at N = 16, samples 1 is 1:1
 
@@ -200,7 +201,7 @@ def test_nan_stays_in_its_channel_through_a_matrix_conversion():
     px = smooth_linear()
     px[2, 3, 0] = np.nan
     env = EnvMap(px, "latlong", metadata={"oiio:ColorSpace": "ACEScg"})
-    out = colorflow.to_working(env).pixels
+    out = color.to_working(env).pixels
     assert np.isnan(out[2, 3, 0]) and np.isfinite(out[2, 3, 1:]).all()
     assert np.isfinite(np.delete(out.reshape(-1, 3), 2 * W + 3, axis=0)).all()
 
@@ -256,7 +257,7 @@ def test_resample_edge_aligned_is_exact_for_linear_functions():
     h, w = 5, 9
     j, i = np.mgrid[0:h, 0:w].astype(np.float64)
     edge = (3 * i / (w - 1) - 2 * j / (h - 1))[..., None]
-    out = colorflow.resample_edge_aligned(edge)
+    out = reader.resample_edge_aligned(edge)
     np.testing.assert_allclose(out[..., 0], 3 * (i + 0.5) / w - 2 * (j + 0.5) / h, atol=1e-6)
 
 
@@ -264,11 +265,11 @@ def test_resample_edge_aligned_is_exact_for_linear_functions():
 
 
 def test_plan_output_defaults():
-    plan = colorflow.plan_output("x.png", "float", {})
+    plan = encode.plan_output("x.png", "float", {})
     assert (plan.pixel_type, plan.metadata_colorspace) == ("uint8", "srgb_rec709_scene")
-    plan = colorflow.plan_output("x.exr", "uint8", {}, output_colorspace="acescg")
+    plan = encode.plan_output("x.exr", "uint8", {}, output_colorspace="acescg")
     assert (plan.pixel_type, plan.metadata_colorspace) == ("half", "lin_ap1_scene")
-    plan = colorflow.plan_output("x.tif", "uint16", {"oiio:ColorSpace": "lin_rec709_scene"})
+    plan = encode.plan_output("x.tif", "uint16", {"oiio:ColorSpace": "lin_rec709_scene"})
     assert (plan.pixel_type, plan.colorspace) == ("uint16", "sRGB Encoded Rec.709 (sRGB)")
-    assert colorflow.check_compression("openexr", "DWAA:45") == "dwaa:45"
-    assert math.isfinite(colorflow.depth.HALF_MAX)
+    assert formats.check_compression("openexr", "DWAA:45") == "dwaa:45"
+    assert math.isfinite(quantize.HALF_MAX)

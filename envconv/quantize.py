@@ -1,11 +1,10 @@
-"""Value range and bit depth: exposure, negatives, NaN/Inf, and quantizing for storage.
+"""Quantisation and dither: float pixels to the values a file stores, and what was clipped.
 
 Pixels are numpy arrays of shape ``(H, W, C)``. Colour channels are the first three when
 ``C >= 3``; a 1- or 2-channel image is grey (plus alpha), and its channel 0 is the colour.
-Alpha and extra channels are never exposed, clamped or dithered. Nothing here knows about
-colour spaces (see :mod:`envconv.color`) or files (see :mod:`envconv.io`). Every function is
-pure: nothing is read, written or printed; what was clipped or replaced is returned as data
-(:class:`ClipReport`, counts).
+Alpha and extra channels are never dithered. Nothing here knows about colour spaces (see
+:mod:`envconv.color`) or files (see :mod:`envconv.io`). Every function is pure: nothing is
+read, written or printed; what was clipped is returned as data (:class:`ClipReport`).
 """
 
 from __future__ import annotations
@@ -15,34 +14,21 @@ from typing import Any
 
 import numpy as np
 
-from envconv.errors import EnvconvError, UsageError
+from envconv.errors import UsageError
 
-__all__ = [
-    "ClipReport",
-    "HALF_MAX",
-    "BIT_DEPTHS",
-    "FIX_MODES",
-    "quantize",
-    "count_nonfinite",
-    "fix_nonfinite",
-    "apply_exposure",
-    "clamp_negative",
-    "as_image",
-    "colour_slice",
-]
+__all__ = ["ClipReport", "HALF_MAX", "BIT_DEPTHS", "quantize", "merge_reports", "as_image",
+           "colour_slice"]  # fmt: skip
 
 HALF_MAX = 65504.0
 """Largest finite IEEE half-float value."""
 
 #: Storage types :func:`quantize` knows, as OIIO names them.
 BIT_DEPTHS = ("half", "float", "uint8", "uint16")
-#: Modes of :func:`fix_nonfinite`, OIIO's ``fixNonFinite`` choices.
-FIX_MODES = ("none", "black", "box3", "error")
+
 _INT_SCALE = {"uint8": 255.0, "uint16": 65535.0}
-_FIX_MODES = FIX_MODES
+
 #: Values within this many codes of a code are on the grid: rounding is exact, no dither.
 _ON_GRID = 2e-3
-
 
 def as_image(pixels: Any) -> np.ndarray:
     """``pixels`` as a float32 ``(H, W, C)`` array (no copy when it already is one).
@@ -54,11 +40,9 @@ def as_image(pixels: Any) -> np.ndarray:
         raise UsageError(f"expected pixels of shape (H, W, C), got shape {arr.shape}")
     return arr
 
-
 def colour_slice(nchannels: int) -> slice:
     """Slice of the colour channels: channel 0 for grey (C < 3), else the first three."""
     return slice(0, 3) if nchannels >= 3 else slice(0, 1)
-
 
 @dataclass(frozen=True)
 class ClipReport:
@@ -110,7 +94,6 @@ class ClipReport:
             f"{self.pixels_below} below 0); use --exposure STOPS or a float bit depth"
         )
 
-
 def _clip_report(bit_depth: str, above: np.ndarray, below: np.ndarray) -> ClipReport:
     pa, pb = above.any(axis=2), below.any(axis=2)
     return ClipReport(
@@ -123,7 +106,6 @@ def _clip_report(bit_depth: str, above: np.ndarray, below: np.ndarray) -> ClipRe
         int(pb.sum()),
         int((pa | pb).sum()),
     )
-
 
 def _tpdf_noise(start: int, count: int) -> np.ndarray:
     """Deterministic triangular noise in (-1, 1) for flat element indices start..start+count-1.
@@ -139,9 +121,9 @@ def _tpdf_noise(start: int, count: int) -> np.ndarray:
     u2 = (z & np.uint64(0xFFFFFF)).astype(np.float32)
     return (u1 - u2) * np.float32(2.0**-24)
 
-
-def _dither_colour(codes: np.ndarray, scale: float) -> None:
-    """Add TPDF dither in place to colour codes strictly inside (0, scale), row block-wise.
+def _dither_colour(codes: np.ndarray, scale: float, start: int = 0) -> None:
+    """Add TPDF dither in place to colour codes strictly inside (0, scale), row block-wise;
+    ``start`` is the flat index of the first element (of rows cut from a larger image).
 
     Codes already on the integer grid (within ``_ON_GRID``) are left alone: rounding them is
     exact, so an 8-bit image written again at 8 bits keeps its codes.
@@ -151,13 +133,21 @@ def _dither_colour(codes: np.ndarray, scale: float) -> None:
     rows = max(1, (1 << 22) // max(1, w * c))
     for y0 in range(0, h, rows):
         block = codes[y0 : y0 + rows]
-        noise = _tpdf_noise(y0 * w * c, block.size).reshape(block.shape)[..., sl]
+        noise = _tpdf_noise(start + y0 * w * c, block.size).reshape(block.shape)[..., sl]
         col = block[..., sl]
-        inside = (col > 0) & (col < scale) & (np.abs(col - np.rint(col)) > _ON_GRID)
+        with np.errstate(invalid="ignore"):  # NaN/Inf codes: never inside, nothing to warn
+            inside = (col > 0) & (col < scale) & (np.abs(col - np.rint(col)) > _ON_GRID)
         block[..., sl] = np.where(inside, col + noise, col)
 
+def merge_reports(reports: list[ClipReport]) -> ClipReport:
+    """One :class:`ClipReport` of an image from the reports of its row blocks."""
+    first = reports[0]
+    fields = ("n_values", "n_pixels", "values_above", "values_below", "pixels_above",
+              "pixels_below", "pixels_clipped")  # fmt: skip
+    return ClipReport(first.bit_depth, *(sum(getattr(r, f) for r in reports) for f in fields))
 
-def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True):
+
+def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True, start: int = 0):
     """Convert float pixels to the storage type of ``bit_depth`` and report what was clipped.
 
     Parameters
@@ -171,6 +161,9 @@ def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True):
         input always gives the same output. Values that already sit on a code (within
         0.002 of one, e.g. 0, 1 or an 8-bit input written back at 8 bits) are not dithered;
         alpha and extra channels are only rounded.
+    start : int, default 0
+        Flat index of the first element in the whole image, when ``pixels`` are rows cut from
+        it (the dither noise is a function of that index, so blocks quantize as the whole).
 
     Returns
     -------
@@ -202,135 +195,6 @@ def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True):
     codes = arr * np.float32(scale)
     report = _clip_report(bit_depth, codes >= scale + 0.5, codes < -0.5)
     if dither and bit_depth == "uint8":
-        _dither_colour(codes, scale)
+        _dither_colour(codes, scale, start)
     codes = np.clip(np.rint(np.nan_to_num(codes, nan=0.0)), 0.0, scale)
     return codes.astype(np.dtype(bit_depth)), report
-
-
-def count_nonfinite(pixels: np.ndarray) -> tuple[int, int]:
-    """Count NaN and ±Inf values (all channels). Returns ``(n_nan, n_inf)``.
-
-    A finite sum proves there are none (a NaN or an Inf makes the sum NaN or Inf), in one pass
-    without temporaries: 1 ms for a 2048 × 1024 RGB map against 7 ms for the counts, which are
-    taken only when the sum is not finite (or overflows)."""
-    arr = np.asarray(pixels)
-    if arr.dtype.kind != "f":
-        return 0, 0
-    with np.errstate(over="ignore", invalid="ignore"):
-        if np.isfinite(arr.sum()):
-            return 0, 0
-    return int(np.isnan(arr).sum()), int(np.isinf(arr).sum())
-
-
-def _box3(arr: np.ndarray, bad: np.ndarray) -> np.ndarray:
-    ys, xs, cs = np.nonzero(bad)
-    h, w = arr.shape[:2]
-    total = np.zeros(ys.shape, np.float64)
-    count = np.zeros(ys.shape, np.int64)
-    for dy in (-1, 0, 1):
-        for dx in (-1, 0, 1):
-            ny, nx = ys + dy, xs + dx
-            inside = (ny >= 0) & (ny < h) & (nx >= 0) & (nx < w)
-            v = arr[np.clip(ny, 0, h - 1), np.clip(nx, 0, w - 1), cs].astype(np.float64)
-            ok = inside & np.isfinite(v)
-            total += np.where(ok, v, 0.0)
-            count += ok
-    out = arr.copy()
-    out[ys, xs, cs] = np.where(count > 0, total / np.maximum(count, 1), 0.0)
-    return out
-
-
-def fix_nonfinite(pixels: np.ndarray, mode: str = "box3") -> tuple[np.ndarray, int]:
-    """Replace NaN and ±Inf values, with the choices of OIIO's ``fixNonFinite``.
-
-    Parameters
-    ----------
-    pixels : ndarray, shape (H, W, C)
-    mode : {'none', 'black', 'box3', 'error'}
-        ``none`` leaves them; ``black`` sets them to 0; ``box3`` sets each to the mean of the
-        finite values of the same channel in its 3x3 neighbourhood (inside the image), or 0
-        if there are none; ``error`` raises. Unlike OIIO, which fixes pixels in raster order
-        and reuses already-fixed neighbours, box3 here only averages originally finite values,
-        so the result does not depend on scan order.
-
-    Returns
-    -------
-    fixed : ndarray of float32
-        A new array, or the input when nothing was replaced.
-    count : int
-        Number of values (not pixels) replaced.
-
-    Raises
-    ------
-    EnvconvError
-        In ``error`` mode when non-finite values are present.
-
-    Examples
-    --------
-    >>> px = np.array([[[1.0], [np.nan], [3.0]]], np.float32)
-    >>> fixed, n = fix_nonfinite(px, "box3")
-    >>> fixed.ravel().tolist(), n
-    ([1.0, 2.0, 3.0], 1)
-    """
-    if mode not in _FIX_MODES:
-        raise UsageError(f"unknown non-finite fix {mode!r}; expected one of {_FIX_MODES}")
-    arr = as_image(pixels)
-    if mode == "none":
-        return arr, 0
-    bad = ~np.isfinite(arr)
-    n_bad = int(bad.sum())
-    if n_bad == 0:
-        return arr, 0
-    if mode == "error":
-        n_nan, n_inf = count_nonfinite(arr)
-        raise EnvconvError(
-            f"input has {n_nan} NaN and {n_inf} Inf values; pass "
-            "--fix-nonfinite black or box3 to replace them"
-        )
-    if mode == "black":
-        return np.where(bad, np.float32(0.0), arr), n_bad
-    return _box3(arr, bad), n_bad
-
-
-def apply_exposure(pixels: np.ndarray, stops: float) -> np.ndarray:
-    """Multiply the colour channels by ``2 ** stops`` (alpha and extras untouched).
-
-    Returns a new float32 array, or the input itself when ``stops == 0``.
-
-    Examples
-    --------
-    >>> apply_exposure(np.ones((1, 1, 4), np.float32), -1).ravel().tolist()
-    [0.5, 0.5, 0.5, 1.0]
-    """
-    stops = float(stops)
-    if not np.isfinite(stops):
-        raise UsageError(f"exposure must be a finite number of stops, got {stops}")
-    arr = as_image(pixels)
-    if stops == 0.0:
-        return arr
-    out = arr.copy()
-    out[..., colour_slice(arr.shape[2])] *= np.float32(2.0**stops)
-    return out
-
-
-def clamp_negative(pixels: np.ndarray) -> tuple[np.ndarray, int]:
-    """Set negative colour values (including -Inf) to 0; NaN, alpha and extras untouched.
-
-    Returns ``(array, n_clamped)``: a new float32 array (or the input when nothing was
-    negative) and the number of values changed.
-
-    Examples
-    --------
-    >>> out, n = clamp_negative(np.array([[[-0.1, 0.25, -3.0, -1.0]]], np.float32))
-    >>> out.ravel().tolist(), n
-    ([0.0, 0.25, 0.0, -1.0], 2)
-    """
-    arr = as_image(pixels)
-    sl = colour_slice(arr.shape[2])
-    neg = arr[..., sl] < 0
-    n = int(neg.sum())
-    if n == 0:
-        return arr, 0
-    out = arr.copy()
-    out[..., sl] = np.where(neg, np.float32(0.0), arr[..., sl])
-    return out, n

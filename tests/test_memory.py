@@ -1,0 +1,183 @@
+"""The memory model and peak memory of real conversions (envconv.memory, docs/memory.md).
+
+Peak memory is measured in a fresh process as its ``VmHWM`` (the high-water mark of its own
+address space, which exec resets; ``ru_maxrss`` would carry the RSS of the forking pytest
+process), less the same process's mark after a warm-up on a tiny map (interpreter, numpy,
+OpenImageIO, OpenEXR, OpenColorIO and the core loaded and run once): the figure the model and
+issue 15's bound are about. Linux only.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import textwrap
+
+import numpy as np
+import pytest
+from conftest import write_plain
+
+import envconv
+from envconv import memory
+from envconv.errors import UsageError
+from envconv.io import encode
+from envconv.quantize import quantize
+
+linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/status")
+
+#: Runs ``envconv convert`` in process after a warm-up; prints the warm and final high-water marks.
+PROBE = textwrap.dedent("""
+    import json, sys
+    from envconv.api import convert_file
+
+    def hwm():
+        with open("/proc/self/status") as handle:
+            return next(int(l.split()[1]) * 1024 for l in handle if l.startswith("VmHWM:"))
+
+    tiny, out_tiny, source, out, resample = sys.argv[1:6]
+    resample = json.loads(resample)
+    convert_file(tiny, out_tiny, resample={**resample, "size": 4})
+    warm = hwm()
+    convert_file(source, out, resample=resample)
+    print(json.dumps([warm, hwm()]))
+""")
+
+
+def _smooth_latlong(height: int) -> np.ndarray:
+    """A smooth RGB lat-long (compresses like a photo would not, but the arrays are the same)."""
+    y, x = np.mgrid[0:height, 0 : 2 * height].astype(np.float32)
+    pixels = np.stack([x / (2 * height), y / height, 0.5 + 0.25 * np.sin(x / 37.0)], axis=2)
+    return pixels.astype(np.float32)
+
+
+@pytest.fixture(scope="module")
+def sources(tmp_path_factory):
+    folder = tmp_path_factory.mktemp("memory")
+    tiny, mid = folder / "tiny.exr", folder / "mid.exr"
+    write_plain(tiny, _smooth_latlong(16))
+    write_plain(mid, _smooth_latlong(2048))
+    return folder, tiny, mid
+
+
+def _measure(folder, tiny, source, out_name: str, resample: dict) -> tuple[int, int]:
+    """(warm baseline, peak) bytes of converting ``source`` in a fresh process."""
+    ext = out_name[out_name.rindex("."):]
+    done = subprocess.run(
+        [sys.executable, "-c", PROBE, str(tiny), str(folder / f"tiny-out{ext}"), str(source),
+         str(folder / out_name), json.dumps(resample)],
+        capture_output=True, text=True, timeout=120, check=True,
+    )  # fmt: skip
+    warm, peak = json.loads(done.stdout.strip().splitlines()[-1])
+    return warm, peak
+
+
+def _array_bytes(source, out) -> tuple[int, int]:
+    """(input, output) float32 array bytes: the source as read, every level written."""
+    width, height, channels, _ = envconv.io.read_header(source)
+    written = sum(w * h for w, h in envconv.io.mip_levels(out)) * len(envconv.io.read_header(out)[2])
+    return width * height * len(channels) * 4, written * 4
+
+
+@linux
+@pytest.mark.parametrize(
+    "out_name, resample",
+    [
+        ("cross.exr", {"to": "cube-vcross", "size": 1024}),
+        ("cross-alpha.png", {"to": "cube-vcross", "size": 1024, "alpha": True}),
+    ],
+)
+def test_estimate_bounds_the_measured_peak(sources, out_name, resample):
+    """The model's estimate is at least the measured peak above the warm baseline and at most
+    twice it (it counts the write phase at a half-float copy, so it is an upper bound)."""
+    folder, tiny, mid = sources
+    warm, peak = _measure(folder, tiny, mid, out_name, resample)
+    source = envconv.read(mid)
+    options = {k: v for k, v in resample.items() if k != "to"}
+    estimate = envconv.resample.memory_needed(source, resample["to"], **options)
+    measured = peak - warm
+    assert measured > 0
+    assert measured <= estimate <= 2 * measured, (measured, estimate)
+
+
+@linux
+@pytest.mark.parametrize(
+    "out_name, resample",
+    [
+        ("plain.exr", {"to": "cube-vcross", "size": 1024}),
+        ("same.exr", {"to": "latlong", "size": 2048}),
+        ("sdr.png", {"to": "cube-vcross", "size": 1024}),
+        ("alpha.exr", {"to": "cube-vcross", "size": 1024, "alpha": True}),
+    ],
+)
+def test_peak_is_within_issue_15_bound(sources, out_name, resample):
+    """Peak RSS ≤ 1.25 × (input + output arrays) + the warm baseline (issue 15), for a
+    2048 × 1024 RGB float source: 24 MB in, 24–48 MB out. No further tolerance."""
+    folder, tiny, mid = sources
+    warm, peak = _measure(folder, tiny, mid, out_name, resample)
+    read, written = _array_bytes(mid, folder / out_name)
+    assert peak - warm <= 1.25 * (read + written), (peak - warm, read, written)
+
+
+def test_blockwise_encoding_is_the_whole_image_encoding(monkeypatch):
+    """Encoding a level in blocks of rows gives the codes and clip report of quantizing it
+    whole (the dither noise follows the element index across blocks)."""
+    rng = np.random.default_rng(5)
+    pixels = rng.uniform(-0.2, 1.3, (37, 29, 4)).astype(np.float32)
+    plan = encode.OutputPlan("png", "uint8", "lin_rec709_scene", "lin_rec709_scene",
+                             "lin_rec709_scene", None)  # fmt: skip
+    whole, report = quantize(pixels, "uint8", dither=True)
+    monkeypatch.setattr(encode, "ENCODE_BLOCK_BYTES", 29 * 4 * 4 * 3)  # 3 rows a block
+    codes, merged, _ = encode._encode_level(pixels, plan, envconv.color.config_for(None), True)
+    np.testing.assert_array_equal(codes, whole)
+    assert merged == report
+
+
+@pytest.mark.parametrize("text, expected", [("2G", 2 << 30), ("512M", 512 << 20),
+                                            ("1.5k", 1536), ("1000", 1000), ("3GiB", 3 << 30)])  # fmt: skip
+def test_limit_variable_is_read_in_bytes(monkeypatch, text, expected):
+    monkeypatch.setenv(memory.LIMIT_VARIABLE, text)
+    assert memory.available() == (expected, True)
+
+
+def test_bad_limit_variable_is_a_usage_error(monkeypatch):
+    monkeypatch.setenv(memory.LIMIT_VARIABLE, "lots")
+    with pytest.raises(UsageError, match=memory.LIMIT_VARIABLE):
+        memory.available()
+
+
+def test_convert_refuses_what_the_limit_cannot_hold(monkeypatch):
+    """The library raises MemoryLimitError before allocating; under the limit it converts."""
+    sky = envconv.EnvMap(np.ones((8, 16, 3), np.float32), "latlong")
+    monkeypatch.setenv(memory.LIMIT_VARIABLE, "64M")
+    with pytest.raises(memory.MemoryLimitError, match="cube-vcross at size 4000"):
+        envconv.convert(sky, "cube-vcross", size=4000)  # 4000² × 12 cells × 12 bytes
+    assert envconv.convert(sky, "cube-vcross", size=64).pixels.shape == (256, 192, 3)
+
+
+def test_estimate_grows_with_every_array():
+    """Each array of the model adds to the estimate: alpha, a chain, holes."""
+    sky = envconv.EnvMap(np.ones((64, 128, 3), np.float32), "latlong")
+    base = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2)
+    plane = 4 * 256 * 3 * 256 * 4  # one float32 plane of the 3N × 4N cross
+    alpha = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2, alpha=True)
+    assert alpha - base >= plane  # the alpha channel in the output
+    chain = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2, mips=True)
+    assert chain - base > 0.9 * plane  # a third more output and the float32 weights of each level
+    holes = envconv.EnvMap(sky.pixels, "latlong", valid=np.ones((64, 128), np.float32))
+    assert envconv.resample.memory_needed(holes, "cube-vcross", size=256, samples=2) > base
+
+
+def test_system_memory_is_used_at_80_percent(monkeypatch):
+    """Without the variable, a run may plan on USABLE_SHARE of the least the system reports:
+    MemAvailable, the cgroup's room and ulimit -v's room."""
+    monkeypatch.delenv(memory.LIMIT_VARIABLE, raising=False)
+    monkeypatch.setattr(memory, "_meminfo_available", lambda: 10 << 30)
+    monkeypatch.setattr(memory, "_cgroup_room", lambda: None)
+    monkeypatch.setattr(memory, "_address_space_room", lambda: None)
+    assert memory.available() == (8 << 30, False)
+    monkeypatch.setattr(memory, "_cgroup_room", lambda: 5 << 30)
+    assert memory.available() == (4 << 30, False)
+    with pytest.raises(memory.MemoryLimitError, match="needs about 6 GB of memory and 4 GB"):
+        memory.check(6 << 30, "this conversion")
+    memory.check(3 << 30, "this conversion")  # fits: no error
