@@ -88,8 +88,12 @@ struct Walk {
     Verdict classify(const NodeRef& nd, const float* f, const Vec3& c, double cR, double sR) const;
     void expand(const float* f, int m);
     void expand_across(const float* f, int m);
-    void leaf(const NodeRef& nd, const float* f, int at);
+    void leaf(const NodeRef& nd, const float* f);
+    int gather(int x0, int y0, int w, int h, Vec3& c, double& cR);
+    void quarters(int x0, int y0, int w, int h, int depth, const std::vector<NodeRef>& in);
     void tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeRef>& in);
+    void reset(int w, int h);
+    void write(int samples, int64_t pw, int64_t ph, float* out, int64_t width) const;
 };
 
 // What the single-sample test says of node `f` for every sample in the cap (c, R), cos R = cR.
@@ -218,9 +222,9 @@ void Walk::expand_across(const float* f, int m) {
     }
 }
 
-// A texel of the finest level, too close for the expansion at gathered sample `at`: its
+// A texel of the finest level, too close for the expansion at the one gathered sample: its
 // radiance is uniform, so integrate K over it by kLeafSamples^2 midpoint sub-samples.
-void Walk::leaf(const NodeRef& nd, const float* f, int at) {
+void Walk::leaf(const NodeRef& nd, const float* f) {
     const double h = 1.0 / double(pyr.p), step = 2.0 * h / kLeafSamples;
     double ksum = 0.0;
     for (int v = 0; v < kLeafSamples; ++v) {
@@ -229,16 +233,17 @@ void Walk::leaf(const NodeRef& nd, const float* f, int at) {
             double a = -1.0 + 2.0 * double(nd.i) * h + (u + 0.5) * step;
             Vec3 d = cube_gl::face_to_dir(nd.face, a, b);
             double w = cube_gl::density(nd.face, a, b) * step * step;
-            ksum += w * lobe.value(sx[at] * d.x + sy[at] * d.y + sz[at] * d.z);
+            ksum += w * lobe.value(sx[0] * d.x + sy[0] * d.y + sz[0] * d.z);
         }
     }
-    sden[at] += ksum;
+    sden[0] += ksum;
     for (int64_t c = 0; c < nch; ++c)
-        snum[c + at] += double(f[Pyramid::kFields + c]) / double(f[0]) * ksum;
+        snum[c] += double(f[Pyramid::kFields + c]) / double(f[0]) * ksum;
 }
 
-// Walk the nodes `in` for the samples of grid rectangle (x0, y0, w, h), then its quarters.
-void Walk::tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeRef>& in) {
+// Gather the valid samples of grid rectangle (x0, y0, w, h) into sx, sy, sz (and fx, fy, fz),
+// clear their sums; their cap's centre into c and the cosine of its radius into cR. The count.
+int Walk::gather(int x0, int y0, int w, int h, Vec3& c, double& cR) {
     index.clear();
     double cx = 0.0, cy = 0.0, cz = 0.0;
     for (int y = y0; y < y0 + h; ++y) {
@@ -252,10 +257,9 @@ void Walk::tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeR
         }
     }
     const int m = int(index.size());
-    if (m == 0) return;
     double len = std::sqrt(cx * cx + cy * cy + cz * cz);
-    Vec3 c{cx / len, cy / len, cz / len};
-    double cR = 1.0;
+    c = m ? Vec3{cx / len, cy / len, cz / len} : Vec3{0.0, 0.0, 1.0};
+    cR = 1.0;
     for (int s = 0; s < m; ++s) {
         sx[s] = nx[index[s]];
         sy[s] = ny[index[s]];
@@ -267,21 +271,30 @@ void Walk::tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeR
         cR = std::min(cR, sx[s] * c.x + sy[s] * c.y + sz[s] * c.z);
     }
     std::fill(snum.begin(), snum.begin() + nch * m, 0.0);
-    if (m == 1) cR = 1.0;
-    const bool split = m > 1 && (w > 1 || h > 1);
-    if (split && !(cR > 0.5)) {  // too wide a tile to share anything: split it at once
-        int hw = (w + 1) / 2, hh = (h + 1) / 2;
-        for (int qy = 0; qy < 2; ++qy)
-            for (int qx = 0; qx < 2; ++qx)
-                if (qx * hw < w && qy * hh < h)
-                    tile(x0 + qx * hw, y0 + qy * hh, qx ? w - hw : hw, qy ? h - hh : hh, depth,
-                         in);
-        return;
-    }
+    return m;
+}
+
+// tile() on each quarter of grid rectangle (x0, y0, w, h).
+void Walk::quarters(int x0, int y0, int w, int h, int depth, const std::vector<NodeRef>& in) {
+    int hw = (w + 1) / 2, hh = (h + 1) / 2;
+    for (int qy = 0; qy < 2; ++qy)
+        for (int qx = 0; qx < 2; ++qx)
+            if (qx * hw < w && qy * hh < h)
+                tile(x0 + qx * hw, y0 + qy * hh, qx ? w - hw : hw, qy ? h - hh : hh, depth, in);
+}
+
+// Walk the nodes `in` for the samples of grid rectangle (x0, y0, w, h), then its quarters.
+void Walk::tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeRef>& in) {
+    Vec3 c;
+    double cR;
+    const int m = gather(x0, y0, w, h, c, cR);
+    if (m == 0) return;
+    const bool split = m > 1;  // one sample is resolved here; more go on to the quarters
+    if (split && !(cR > 0.5)) return quarters(x0, y0, w, h, depth, in);  // too wide to share
     // Bounds rounded outwards, so that float error never lets a node through.
-    cR = std::max(0.0, cR - 1e-12);
-    double sR = m == 1 ? 0.0 : std::sqrt(std::max(0.0, 1.0 - cR * cR)) + 1e-12;
-    if ((int)lists.size() <= depth) lists.resize(depth + 1);
+    cR = split ? std::max(0.0, cR - 1e-12) : 1.0;
+    const double sR = split ? std::sqrt(std::max(0.0, 1.0 - cR * cR)) + 1e-12 : 0.0;
+    if (int(lists.size()) <= depth) lists.resize(depth + 1);
     std::vector<NodeRef>& deferred = lists[depth];
     deferred.clear();
     stack.assign(in.begin(), in.end());
@@ -294,7 +307,7 @@ void Walk::tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeR
             case kExpandAcross: expand_across(f, m); break;
             case kExpand: expand(f, m); break;
             case kDefer: deferred.push_back(nd); break;
-            case kLeaf: leaf(nd, f, 0); break;
+            case kLeaf: leaf(nd, f); break;
             case kOpen:
                 for (int32_t y = 2 * nd.j; y < 2 * nd.j + 2; ++y)
                     for (int32_t x = 2 * nd.i; x < 2 * nd.i + 2; ++x)
@@ -309,13 +322,54 @@ void Walk::tile(int x0, int y0, int w, int h, int depth, const std::vector<NodeR
     if (deferred.empty() || !split) return;
     std::vector<NodeRef> mine;
     mine.swap(deferred);  // the quarters reuse lists[depth + 1 ...] only
-    int hw = (w + 1) / 2, hh = (h + 1) / 2;
-    for (int qy = 0; qy < 2; ++qy)
-        for (int qx = 0; qx < 2; ++qx)
-            if (qx * hw < w && qy * hh < h)
-                tile(x0 + qx * hw, y0 + qy * hh, qx ? w - hw : hw, qy ? h - hh : hh, depth + 1,
-                     mine);
+    quarters(x0, y0, w, h, depth + 1, mine);
     mine.swap(lists[depth]);
+}
+
+// Size the tile's buffers for a grid of gw x gh samples, all zero (weight 0: not readable).
+void Walk::reset(int w, int h) {
+    gw = w;
+    gh = h;
+    const int cells = gw * gh;
+    for (auto* v : {&nx, &ny, &nz, &weight, &den, &sx, &sy, &sz, &sden}) v->assign(cells, 0.0);
+    for (auto* v : {&fx, &fy, &fz, &fden, &fk, &fk1}) v->assign(cells, 0.0f);
+    num.assign(nch * cells, 0.0);
+    snum.assign(nch * cells, 0.0);
+}
+
+// Each pixel of the tile (pw x ph pixels of samples x samples sub-samples) into `out` (rows of
+// `width` pixels): the solid-angle mean of num / den over its sub-samples.
+void Walk::write(int samples, int64_t pw, int64_t ph, float* out, int64_t width) const {
+    std::vector<double> acc(nch);
+    for (int64_t j = 0; j < ph; ++j) {
+        for (int64_t i = 0; i < pw; ++i) {
+            std::fill(acc.begin(), acc.end(), 0.0);
+            double wsum = 0.0;
+            for (int sy = 0; sy < samples; ++sy) {
+                for (int sx = 0; sx < samples; ++sx) {
+                    int k = int((j * samples + sy) * gw + i * samples + sx);
+                    double w = weight[k], d = den[k];
+                    if (!(w > 0.0) || !(d > 0.0)) continue;
+                    for (int64_t c = 0; c < nch; ++c) acc[c] += w * num[c * gw * gh + k] / d;
+                    wsum += w;
+                }
+            }
+            float* px = out + (j * width + i) * nch;
+            for (int64_t c = 0; c < nch; ++c) px[c] = wsum > 0.0 ? float(acc[c] / wsum) : 0.0f;
+        }
+    }
+}
+
+// 1 / the map's mean luminance (from the six root nodes), 0 for a black map: a node's
+// luminance weight times it is the solid angle the node would fill at that mean radiance.
+double inverse_mean_luminance(const Pyramid& pyr) {
+    double lum = 0.0, area = 0.0;
+    const float* top = pyr.data + pyr.offset(pyr.levels - 1);
+    for (int f = 0; f < 6; ++f) {
+        area += top[f * pyr.stride()];
+        lum += top[f * pyr.stride() + 1];
+    }
+    return lum > 0.0 ? area / lum : 0.0;
 }
 
 }  // namespace
@@ -331,15 +385,7 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
                             (2.0 * scale_y / double(dst.n)) / double(samples * samples);
     const int64_t span = std::max(1, kTileSamples / samples);  // pixels per tile side
     const int64_t tiles_x = (width + span - 1) / span, tiles_y = (height + span - 1) / span;
-    // Mean luminance of the map (from the six root nodes): a node's luminance weight over it
-    // is the solid angle the node would have at that mean radiance.
-    double lum = 0.0, area = 0.0;
-    const float* top = pyr.data + pyr.offset(pyr.levels - 1);
-    for (int f = 0; f < 6; ++f) {
-        area += top[f * pyr.stride()];
-        lum += top[f * pyr.stride() + 1];
-    }
-    const double inv_mean_lum = lum > 0.0 ? area / lum : 0.0;
+    const double inv_mean_lum = inverse_mean_luminance(pyr);
     std::vector<NodeRef> roots;
     for (int32_t f = 0; f < 6; ++f) roots.push_back({pyr.levels - 1, f, 0, 0});
     parallel_for(tiles_x * tiles_y, threads, [&](int64_t task) {
@@ -347,16 +393,8 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
         const int64_t pw = std::min(span, width - i0), ph = std::min(span, height - j0);
         Walk walk(pyr, lobe, tau, kink_tol);
         walk.inv_mean_lum = inv_mean_lum;
-        const int gw = int(pw * samples), gh = int(ph * samples), cells = gw * gh;
-        walk.gw = gw;
-        walk.gh = gh;
-        for (auto* v : {&walk.nx, &walk.ny, &walk.nz, &walk.weight, &walk.den, &walk.sx, &walk.sy,
-                        &walk.sz, &walk.sden})
-            v->assign(cells, 0.0);
-        for (auto* v : {&walk.fx, &walk.fy, &walk.fz, &walk.fden, &walk.fk, &walk.fk1})
-            v->assign(cells, 0.0f);
-        walk.num.assign(nch * cells, 0.0);
-        walk.snum.assign(nch * cells, 0.0);
+        const int gw = int(pw * samples), gh = int(ph * samples);
+        walk.reset(gw, gh);
         for (int y = 0; y < gh; ++y) {
             double py = (double(j0) + (y + 0.5) / samples) * scale_y;
             for (int x = 0; x < gw; ++x) {
@@ -372,24 +410,7 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
             }
         }
         walk.tile(0, 0, gw, gh, 0, roots);
-        std::vector<double> acc(nch);
-        for (int64_t j = 0; j < ph; ++j) {
-            for (int64_t i = 0; i < pw; ++i) {
-                std::fill(acc.begin(), acc.end(), 0.0);
-                double wsum = 0.0;
-                for (int sy = 0; sy < samples; ++sy) {
-                    for (int sx = 0; sx < samples; ++sx) {
-                        int k = int((j * samples + sy) * gw + i * samples + sx);
-                        double w = walk.weight[k], d = walk.den[k];
-                        if (!(w > 0.0) || !(d > 0.0)) continue;
-                        for (int64_t c = 0; c < nch; ++c) acc[c] += w * walk.num[c * cells + k] / d;
-                        wsum += w;
-                    }
-                }
-                float* px = out + ((j0 + j) * width + i0 + i) * nch;
-                for (int64_t c = 0; c < nch; ++c) px[c] = wsum > 0.0 ? float(acc[c] / wsum) : 0.0f;
-            }
-        }
+        walk.write(samples, pw, ph, out + (j0 * width + i0) * nch, width);
     });
 }
 
