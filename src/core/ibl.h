@@ -10,16 +10,18 @@
 //
 // Evaluation is a Barnes-Hut sum over a pyramid of the source cube's texels (Barnes & Hut,
 // Nature 324, 1986): each node stores its solid angle, Int L dl per channel, and two mean
-// directions, the geometric one and the luminance-weighted one (unnormalised, so that
-// 1 - |m|^2 is the spread of directions in the node). A node far enough from n that K is
+// directions, the geometric one and the luminance-weighted one (as unit vectors and lengths
+// |m|: 1 - |m|^2 is the spread of directions in the node). A node far enough from n that K is
 // smooth over it contributes by a second-order expansion of K about the node's mean t = n.m:
 //   Int_node L K(n.l) dl ~ S [K(t) + K''(t) Var(t) / 2],  Var(t) ~ (1 - t^2)(1 - |m|^2) / 2,
 // exact for a constant node to second order and, with each channel's first moment, exact to
 // first order for any radiance inside it (a one-texel sun is placed where it is, not at the
 // node's centre). A node is expanded when its spread of t, dt, is small against K's own scale
-// there, q(t) / |q'| (dt |b| <= tau q), and it does not straddle n's horizon (where K has a
-// kink) unless K is negligible there; other nodes are opened, and texels of the finest level
-// still too close are integrated by 3 x 3 sub-samples. Sums are normalised per output sample by
+// there, q(t) / |q'| (dt |b| <= tau q, tighter for nodes brighter than the map's mean), and it
+// does not straddle n's horizon (where K has a kink) unless K is negligible there (a node that
+// does is integrated over its part above the horizon); other nodes are opened, and texels of
+// the finest level still too close are integrated by 3 x 3 sub-samples. prefilter.cpp walks
+// tiles of output samples together (a dual-tree walk) and gives the details. Sums are normalised per output sample by
 // the same expansion of Int K with the geometric means, so a constant environment stays that
 // constant. An output pixel is the solid-angle mean of S x S such point evaluations.
 #pragma once
