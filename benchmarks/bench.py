@@ -14,6 +14,8 @@ Run by hand and quote the figures; nothing here is a test.
                                             # venv and py360convert + OpenCV, interleaved
                                             # (see benchmarks/targets.py, or targets --help)
     python benchmarks/bench.py ibl          # GGX chain + irradiance, whole process, and per level
+    python benchmarks/bench.py ibl --baseline PYTHON
+                                            # the same, interleaved with another venv's envconv
     python benchmarks/bench.py preview      # contact sheet and viewer page of a 16K lat-long, in process
     python benchmarks/bench.py memory       # peak RSS over (input + output arrays), per case,
                                             # beside envconv.memory's estimate (docs/memory.md)
@@ -217,21 +219,49 @@ def bench_mips(repeats: int = 7) -> None:
     print(f"mips latlong 2048x1024 -> cube-vcross 512, S={s}: level 0 {level0 * 1e3:.0f} ms, full chain (12 levels) {chain * 1e3:.0f} ms, ratio {chain / level0:.2f}")
 
 
-def bench_ibl(runs: int = 5) -> None:
+def _run_cpu(cmd: list[str]) -> tuple[float, float]:
+    """Wall time and CPU time (user + system, all threads) of one child process."""
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
+    elapsed = _run(cmd)[0]
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return elapsed, after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
+
+
+def bench_ibl(runs: int = 5, baseline: str | None = None) -> None:
     """Image-based lighting: lat-long 2048x1024 -> GGX chain of a cube 256 (DDS) and a 32
-    irradiance cube (DDS), one process; then the prefilter's time per level, in process."""
-    exe = os.path.join(os.path.dirname(sys.executable), "envconv")
+    irradiance cube (DDS), one process (wall and CPU time); then the prefilter's time per level,
+    in process. With ``baseline`` (another venv's python), that venv's ``envconv`` runs the same
+    command alternately with this one, and the ratios are printed."""
+    exes = {"this": os.path.join(os.path.dirname(sys.executable), "envconv")}
+    if baseline:
+        exes["baseline"] = os.path.join(os.path.dirname(os.path.abspath(baseline)), "envconv")
     _compile_bytecode()
     with tempfile.TemporaryDirectory() as tmp:
         src_path = os.path.join(tmp, "latlong-2048.exr")
         envconv.write(_latlong(1024), src_path, bit_depth="float")
-        cmd = [exe, "read", src_path, "resample", "--to", "cube-faces", "--size", "256", "--mips",
-               "ggx", "write", os.path.join(tmp, "spec.dds"), "resample", "--to", "cube-faces",
-               "--size", "32", "--irradiance", "write", os.path.join(tmp, "irr.dds")]  # fmt: skip
-        _run(cmd)
-        times = [_run(cmd)[0] for _ in range(runs)]
-        print(f"ibl {' '.join(cmd[1:])}: median {statistics.median(times):.3f} s, best "
-              f"{min(times):.3f} s over {runs} runs")  # fmt: skip
+
+        def cmd(exe):
+            return [exe, "read", src_path, "resample", "--to", "cube-faces", "--size", "256",
+                    "--mips", "ggx", "write", os.path.join(tmp, "spec.dds"), "resample", "--to",
+                    "cube-faces", "--size", "32", "--irradiance", "write",
+                    os.path.join(tmp, "irr.dds")]  # fmt: skip
+
+        for exe in exes.values():
+            _run(cmd(exe))  # first run: may compile
+        spent = {name: [] for name in exes}
+        for _ in range(runs):
+            for name, exe in exes.items():
+                spent[name].append(_run_cpu(cmd(exe)))
+    for name, exe in exes.items():
+        wall, cpu = [w for w, _ in spent[name]], [c for _, c in spent[name]]
+        print(f"ibl {name} ({exe}) {' '.join(cmd('envconv')[1:])}: median "
+              f"{statistics.median(wall):.3f} s, best {min(wall):.3f} s, CPU median "
+              f"{statistics.median(cpu):.3f} s over {runs} runs")  # fmt: skip
+    if baseline:
+        ratio = [b[0] / t[0] for t, b in zip(spent["this"], spent["baseline"], strict=True)]
+        cpu_ratio = [b[1] / t[1] for t, b in zip(spent["this"], spent["baseline"], strict=True)]
+        print(f"ibl baseline/this, run by run: wall median {statistics.median(ratio):.2f}x, "
+              f"CPU median {statistics.median(cpu_ratio):.2f}x")  # fmt: skip
     from envconv import ibl
 
     source = _latlong(1024)
@@ -369,6 +399,13 @@ def main(argv: list[str]) -> None:
             raise SystemExit("usage: python benchmarks/bench.py versus OTHER_CHECKOUT")
         bench_versus(which[1])
         return
+    baseline = None
+    if "--baseline" in which:
+        at = which.index("--baseline")
+        if at + 1 >= len(which):
+            raise SystemExit("usage: python benchmarks/bench.py ibl --baseline PYTHON")
+        baseline = which[at + 1]
+        which = which[:at] + which[at + 2 :]
     unknown = set(which) - {"kernel", "e2e", "batch", "mips", "ibl", "preview", "memory"}
     if unknown:
         raise SystemExit(f"unknown benchmark {', '.join(sorted(unknown))}; see --help")
@@ -381,7 +418,7 @@ def main(argv: list[str]) -> None:
     if "mips" in which:
         bench_mips()
     if "ibl" in which:
-        bench_ibl()
+        bench_ibl(baseline=baseline)
     if "preview" in which:
         bench_preview()
     if "memory" in which:

@@ -27,7 +27,7 @@ __all__ = [
     "get_threads", "set_threads", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
-    "ibl_pyramid", "ibl_prefilter", "sh_project",
+    "ibl_node_floats", "ibl_pyramid", "ibl_prefilter", "sh_project",
     "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
     "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES",
 ]  # fmt: skip
@@ -305,13 +305,18 @@ def level_reads(rip, start, level_width, points) -> np.ndarray:
     return out
 
 
+def ibl_node_floats(nch: int) -> int:
+    """Floats per node of :func:`ibl_pyramid`'s pyramid, for ``nch`` channels."""
+    return _core.IBL_NODE_FIELDS + 4 * nch
+
+
 def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
     """The GGX prefilter's pyramid of a cube's six faces (6, p, p, C) float32, p a power of
     two: every level's texel moments, packed as src/core/ibl.h describes."""
     faces = _c(faces, np.float32)
     p, nch = faces.shape[1], faces.shape[3]
     count = sum(6 * (p >> k) ** 2 for k in range(p.bit_length()))
-    pyramid = np.empty(count * (8 + 4 * nch), np.float32)
+    pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
     _core.ibl_pyramid(faces, pyramid, _threads)
     return pyramid
 

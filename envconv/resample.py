@@ -173,6 +173,11 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     n_samples = check_samples(samples)
     if n_samples is None and mips:
         n_samples = auto_samples(envmap, to, size)
+    if n_samples is None and irradiance:
+        # Every level becomes the cosine convolution, read from the source itself: of level 0
+        # only the coverage is kept, and 8 x 8 sub-samples give it as "auto" does at a rim
+        # (auto would take up to 32 x 32 per pixel in a strong reduction, for nothing).
+        n_samples = kernels.AUTO_EDGE_SAMPLES
     yaw, pitch, roll = parse_rotation(rotate)
     # Output direction d → source direction Rᵀ d.
     rot = rotation_matrix(yaw, pitch, roll).T

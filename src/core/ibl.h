@@ -10,16 +10,18 @@
 //
 // Evaluation is a Barnes-Hut sum over a pyramid of the source cube's texels (Barnes & Hut,
 // Nature 324, 1986): each node stores its solid angle, Int L dl per channel, and two mean
-// directions, the geometric one and the luminance-weighted one (unnormalised, so that
-// 1 - |m|^2 is the spread of directions in the node). A node far enough from n that K is
+// directions, the geometric one and the luminance-weighted one (as unit vectors and lengths
+// |m|: 1 - |m|^2 is the spread of directions in the node). A node far enough from n that K is
 // smooth over it contributes by a second-order expansion of K about the node's mean t = n.m:
 //   Int_node L K(n.l) dl ~ S [K(t) + K''(t) Var(t) / 2],  Var(t) ~ (1 - t^2)(1 - |m|^2) / 2,
 // exact for a constant node to second order and, with each channel's first moment, exact to
 // first order for any radiance inside it (a one-texel sun is placed where it is, not at the
 // node's centre). A node is expanded when its spread of t, dt, is small against K's own scale
-// there, q(t) / |q'| (dt |b| <= tau q), and it does not straddle n's horizon (where K has a
-// kink) unless K is negligible there; other nodes are opened, and texels of the finest level
-// still too close are integrated by 3 x 3 sub-samples. Sums are normalised per output sample by
+// there, q(t) / |q'| (dt |b| <= tau q, tighter for nodes brighter than the map's mean), and it
+// does not straddle n's horizon (where K has a kink) unless K is negligible there (a node that
+// does is integrated over its part above the horizon); other nodes are opened, and texels of
+// the finest level still too close are integrated by 3 x 3 sub-samples. prefilter.cpp walks
+// tiles of output samples together (a dual-tree walk) and gives the details. Sums are normalised per output sample by
 // the same expansion of Int K with the geometric means, so a constant environment stays that
 // constant. An output pixel is the solid-angle mean of S x S such point evaluations.
 #pragma once
@@ -33,17 +35,22 @@ namespace envconv {
 // A pyramid of the six faces of a cube (GL face table), level 0 of p x p texels per face, each
 // level halving down to 1 x 1. Node (level s, face f, row j, column i) starts at
 // data + offset(s) + ((f * (p >> s) + j) * (p >> s) + i) * stride, with fields
-// [omega, W, mgx, mgy, mgz, mlx, mly, mlz, S_0 .. S_{C-1}, P_0 .. P_{C-1}]: solid angle,
-// luminance weight Int max(lum, 0) dl, geometric and luminance-weighted mean directions,
-// Int L_c dl, and Int L_c l dl (three floats each): the expansion about the luminance-weighted
-// mean carries each channel's own first moment, so channels that differ are exact to first
-// order too.
+// [omega, W, ugx, ugy, ugz, |g|, ulx, uly, ulz, |l|, 1 - cos r, sin r, S_0 .. S_{C-1},
+//  P_0 .. P_{C-1}]: solid angle, luminance weight Int max(lum, 0) dl, the geometric and the
+// luminance-weighted mean directions each as a unit vector and a length (1 - |m|^2 is the
+// spread of directions in the node), the node's angular radius r about the unit geometric mean
+// (the largest angle to its four corners: its edges are great-circle arcs), Int L_c dl, and
+// Int L_c (l - m_l) dl (three floats each), m_l = ul |l| as stored: the expansion about the
+// luminance-weighted mean carries each channel's own first moment about it, so channels that
+// differ are exact to first order too (and a uniform node's is 0, not a difference of floats).
 struct Pyramid {
+    static constexpr int64_t kFields = 12;
     const float* data;
     int64_t p;
     int levels;
     int64_t channels;
-    int64_t stride() const { return 8 + 4 * channels; }
+    static int64_t stride_for(int64_t channels) { return kFields + 4 * channels; }
+    int64_t stride() const { return stride_for(channels); }
     int64_t offset(int s) const {
         int64_t off = 0;
         for (int k = 0; k < s; ++k) off += 6 * (p >> k) * (p >> k);
@@ -57,7 +64,7 @@ struct Pyramid {
 };
 
 // Build the pyramid of `faces` (6, p, p, C) float32, p a power of two, into `out`
-// (Pyramid::node_count(p) * (8 + 4 C) floats).
+// (Pyramid::node_count(p) * Pyramid::stride_for(C) floats).
 void build_pyramid(const float* faces, int64_t p, int64_t channels, float* out, int threads);
 
 // One prefiltered level: every pixel of `out` (H, W, C) is the solid-angle mean over its

@@ -258,7 +258,7 @@ void ibl_pyramid(Array<const float, nb::ndim<4>> faces, Array<float, nb::ndim<1>
                  int threads) {
     int64_t p = faces.shape(1), nch = faces.shape(3);
     if (faces.shape(0) != 6 || int64_t(faces.shape(2)) != p || p < 1 || (p & (p - 1)) ||
-        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * (8 + 4 * nch))
+        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(nch))
         throw std::invalid_argument("faces must be (6, p, p, C) with p a power of two");
     nb::gil_scoped_release release;
     envconv::build_pyramid(faces.data(), p, nch, out.data(), threads);
@@ -272,7 +272,7 @@ void ibl_prefilter(Array<const float, nb::ndim<1>> pyramid, int64_t p, int64_t c
     envconv::Pyramid pyr{pyramid.data(), p, 0, channels};
     for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
     if (p < 1 || (p & (p - 1)) ||
-        int64_t(pyramid.shape(0)) != envconv::Pyramid::node_count(p) * (8 + 4 * channels) ||
+        int64_t(pyramid.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(channels) ||
         int64_t(out.shape(2)) != channels || samples < 1 || !(alpha > 0.0) || !(tau > 0.0))
         throw std::invalid_argument("bad prefilter arguments");
     auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
@@ -331,6 +331,7 @@ NB_MODULE(_core, m) {
           "face_cell"_a, "samples"_a, "sign_x"_a, "out"_a, "threads"_a);
     // Stop (true) every running kernel at its next task, or let kernels run again (false).
     m.def("cancel", [](bool on) { envconv::cancel_requested.store(on); }, "on"_a);
+    m.attr("IBL_NODE_FIELDS") = envconv::Pyramid::kFields;
     m.attr("TILE") = envconv::kTile;  // output rows per band: the progress counter's unit
     m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;
     m.attr("AUTO_MAX_SAMPLES") = envconv::kAutoMaxSamples;
