@@ -187,10 +187,10 @@ def worker_threads(jobs: int, cores: int | None = None) -> int:
 
 
 def _init_worker(threads: int) -> None:
-    # OpenImageIO (EXR compression) reads its thread count when first imported.
-    os.environ["OPENIMAGEIO_THREADS"] = str(threads)
+    from .io.files import limit_threads
     from .kernels import set_threads
 
+    limit_threads(threads)
     set_threads(threads)
 
 

@@ -6,6 +6,7 @@ face file, through a temporary file renamed into place. The modules:
 
 * :mod:`~envconv.io.reader`: maps from files (one file, ``{face}`` sets, parts, levels);
 * :mod:`~envconv.io.writer`: maps to files, and :func:`write_bytes` for made containers;
+* :mod:`~envconv.io.specs`: what a written image carries (channels, tags, its ImageSpec);
 * :mod:`~envconv.io.temps`: the temporary files of writes (names, live ones, stale ones);
 * :mod:`~envconv.io.probe`: a map's facts from its headers alone (``envconv info``);
 * :mod:`~envconv.io.files`: headers, display/data windows and parts, through OIIO;

@@ -208,8 +208,8 @@ def library_output(what: str, path: str | os.PathLike | None = None):
         except BaseException as exc:  # folded below, once the descriptors are back
             failure = exc
     caught.text = _read_back(sink) + "\n" + python_text.getvalue()[:_KEEP_BYTES]
-    for line in caught.own_lines():  # a warning logged during the read stays a warning
-        print(line, file=sys.stderr)
+    for line in caught.own_lines():  # envconv's own log lines, swallowed by the capture,
+        sys.stderr.write(line + "\n")  # go where its log handler had written them
     if failure is None:
         _report(caught, name)
         return

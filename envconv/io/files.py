@@ -25,6 +25,7 @@ from __future__ import annotations
 import logging
 import os
 import re
+import sys
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Any, NamedTuple
@@ -38,7 +39,7 @@ from .exr import read_exr_pixels as _read_exr_pixels
 from .formats import FORMATS
 
 __all__ = ["read_file", "read_file_header", "read_image", "read_header", "read_pixel_type",
-           "FileHeader", "FileImage", "Part", "FORMATS"]  # fmt: skip
+           "FileHeader", "FileImage", "Part", "FORMATS", "limit_threads"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -50,6 +51,17 @@ def _oiio():
     import OpenImageIO
 
     return OpenImageIO
+
+
+def limit_threads(threads: int) -> None:
+    """Give the image libraries ``threads`` threads (EXR compression and decoding): a batch
+    worker's share of the cores. OpenImageIO reads ``OPENIMAGEIO_THREADS`` when first
+    imported; once imported, its ``threads`` and ``exr_threads`` attributes are set."""
+    os.environ["OPENIMAGEIO_THREADS"] = str(int(threads))
+    if "OpenImageIO" in sys.modules:
+        oiio = _oiio()
+        oiio.attribute("threads", int(threads))
+        oiio.attribute("exr_threads", int(threads))
 
 
 @dataclass(frozen=True)

@@ -11,7 +11,6 @@ from __future__ import annotations
 import logging
 import os
 from dataclasses import replace
-from typing import Any, NamedTuple
 
 import numpy as np
 
@@ -20,7 +19,8 @@ from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from .chatter import library_output
 from .files import _first_line, _oiio
-from .formats import CONTAINER_FORMATS, choose_pixel_type, format_of
+from .formats import CONTAINER_FORMATS, format_of
+from .specs import LevelImage, image_spec, level_image, set_mip_attributes
 from .temps import discard as _discard
 from .temps import temp_for as _temp_path
 
@@ -237,11 +237,11 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
     else:
         writes = []
         for k, pixels in enumerate(images):
-            image = _level_image(target, pixels, envmap, face, bit_depth, compression, level)
-            spec = _image_spec(image)
+            image = level_image(target, pixels, envmap, face, bit_depth, compression, level)
+            spec = image_spec(image)
             mode = "Create"
             if len(images) > 1:
-                _set_mip_attributes(spec, fmt)
+                set_mip_attributes(spec, fmt)
                 mode = "Create" if k == 0 else "AppendMIPLevel" if fmt == "openexr" else "AppendSubimage"
             writes.append((spec, mode, image.data))
     _run_writes(temp, target, writes)
@@ -254,9 +254,9 @@ def _part_writes(target, pixels, envmap, face, bit_depth, compression, level):
     for name, names in envmap.parts:
         data = pixels[:, :, start : start + len(names)]
         start += len(names)
-        image = _level_image(target, data, envmap, face, bit_depth, compression, level, names)
+        image = level_image(target, data, envmap, face, bit_depth, compression, level, names)
         image.attributes.append(("name", name))
-        writes.append((_image_spec(image), "AppendSubimage", image.data))
+        writes.append((image_spec(image), "AppendSubimage", image.data))
     specs = [spec for spec, _, _ in writes]
     writes[0] = (specs, "Create", writes[0][2])
     return writes
@@ -327,157 +327,3 @@ def _write_pixels(out, data) -> bool:
         if not done:
             return False
     return True
-
-
-def _int_tag(fmt: str, value: int):
-    """An integer tag as the format can keep it: PNG and JPEG keep only text attributes."""
-    return str(int(value)) if fmt in ("png", "jpeg") else int(value)
-
-
-def _set_mip_attributes(spec, fmt: str) -> None:
-    """Tiled MIP-map attributes: EXR MIPMAP_LEVELS with ROUND_DOWN, TIFF MIP directories."""
-    spec.tile_width = spec.tile_height = 64
-    if fmt == "openexr":
-        spec.attribute("openexr:levelmode", 1)  # MIPMAP_LEVELS
-        spec.attribute("openexr:roundingmode", 0)  # ROUND_DOWN
-    if not spec.get_string_attribute("textureformat"):
-        spec.attribute("textureformat", "Plain Texture")
-
-
-class LevelImage(NamedTuple):
-    """One image as it is to be written, before any image library is involved.
-
-    ``attributes`` are the (name, value) pairs its OIIO ImageSpec gets, in that order (see
-    :func:`_image_spec`); ``data`` is (H, W, C) float32 holding the values to store (codes,
-    half or float, from :func:`envconv.io.encode.encode_output`)."""
-
-    format: str
-    channels: tuple[str, ...]
-    pixel_type: str
-    alpha_index: int | None
-    attributes: list[tuple[str, Any]]
-    data: np.ndarray
-
-
-def _level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, level=None,
-                 channels=None):  # fmt: skip
-    """The :class:`LevelImage` of one image of ``envmap`` written to ``target`` (of one of
-    its parts when ``channels`` names that part's channels)."""
-    fmt, _, _, max_channels = format_of(target)
-    pixel_type = choose_pixel_type(target, envmap.pixel_type, bit_depth)
-    channels = list(envmap.channels if channels is None else channels)
-    if max_channels is not None and len(channels) > max_channels:
-        log.warning(
-            "%s stores at most %d channels; writing %s",
-            fmt,
-            max_channels,
-            ",".join(channels[:max_channels]),
-        )
-        pixels = _take(pixels, range(max_channels))
-        channels = channels[:max_channels]
-    if fmt == "hdr" and len(channels) != 3:
-        pixels = _take(pixels, [0, 0, 0])
-        channels = ["R", "G", "B"]
-    nch = pixels.shape[2]
-    alpha = next((k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None)
-    attributes: list[tuple[str, Any]] = []
-    if alpha is not None and fmt in ("png", "tiff"):
-        # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
-        # mark it premultiplied (TIFF). envconv's alpha is a validity mask.
-        attributes.append(("oiio:UnassociatedAlpha", 1))
-    attributes.extend(envmap.metadata.items())
-    attributes.extend(_envconv_tags(envmap, fmt, face))
-    if compression is not None:
-        attributes.append(("compression", compression))
-    if level is not None:
-        attributes.append(("envconv:level", _int_tag(fmt, level)))
-    data = pixels if hasattr(pixels, "rows") else np.ascontiguousarray(pixels)
-    return LevelImage(fmt, tuple(channels), pixel_type, alpha, attributes, data)
-
-
-def _take(pixels, channels):
-    """``pixels[:, :, channels]`` of an array or of a lazily encoded level."""
-    channels = list(channels)
-    return pixels.take(channels) if hasattr(pixels, "rows") else pixels[:, :, channels]
-
-
-def _image_spec(image: LevelImage):
-    """The OIIO ImageSpec of ``image``."""
-    oiio = _oiio()
-    height, width, nch = image.data.shape
-    spec = oiio.ImageSpec(width, height, nch, getattr(oiio, image.pixel_type.upper()))
-    spec.channelnames = image.channels
-    if image.alpha_index is not None:
-        spec.alpha_channel = image.alpha_index
-    for name, value in image.attributes:
-        _set_attribute(spec, name, value)
-    return spec
-
-
-# TIFF, Radiance HDR and JPEG keep only the attributes their format defines, so envconv's
-# layout tags also travel in ImageDescription, as "envconv:layout=NAME envconv:size=N ...".
-_DESCRIPTION_FORMATS = ("tiff", "hdr", "jpeg")
-
-
-def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str, Any]]:
-    """The attributes that tag a file as envconv's: layout, size, guard, version, face, and
-    OpenEXR's envmap (through OIIO's ``textureformat``)."""
-    from .. import __version__
-
-    tags: list[tuple[str, Any]] = []
-    if fmt in _DESCRIPTION_FORMATS:
-        words = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
-        if face is not None:
-            words["face"] = face
-        text = " ".join(f"envconv:{k}={v}" for k, v in words.items())
-        kept = str(envmap.metadata.get("ImageDescription", "")).strip()
-        tags.append(("ImageDescription", f"{kept} {text}".strip()))
-
-    tags += [
-        ("envconv:layout", envmap.layout.name),
-        ("envconv:size", _int_tag(fmt, envmap.size)),
-        ("envconv:guard", _int_tag(fmt, envmap.guard)),
-        ("envconv:version", __version__),
-        ("Software", f"envconv {__version__}"),
-    ]
-    if face is not None:
-        tags.append(("envconv:face", face))
-    stamp = _source_date()
-    if stamp is not None and "DateTime" not in envmap.metadata:
-        tags.append(("DateTime", stamp))
-    if fmt == "openexr" and envmap.guard == 0:
-        # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
-        # "envmap" string would be stored with the wrong type and make the file unreadable.
-        if envmap.layout.name == "latlong":
-            tags.append(("textureformat", "LatLong Environment"))
-        elif envmap.layout.name == "cube-exr":
-            tags.append(("textureformat", "CubeFace Environment"))
-    return tags
-
-
-def _source_date() -> str | None:
-    """``DateTime`` from ``SOURCE_DATE_EPOCH`` (reproducible builds: the same inputs give the
-    same bytes, whenever and however often they are written), else None: OpenImageIO stamps
-    the time of writing."""
-    value = os.environ.get("SOURCE_DATE_EPOCH", "").strip()
-    if not value.isdigit():
-        return None
-    import time
-
-    return time.strftime("%Y:%m:%d %H:%M:%S", time.gmtime(int(value)))
-
-
-def _set_attribute(spec, name: str, value: Any) -> None:
-    try:
-        if isinstance(value, (str, int, float)):
-            spec.attribute(name, value)
-        elif isinstance(value, (tuple, list)) and value:
-            oiio = _oiio()
-            kind = oiio.FLOAT if isinstance(value[0], float) else oiio.INT
-            spec.attribute(
-                name,
-                oiio.TypeDesc(f"{'float' if kind == oiio.FLOAT else 'int'}[{len(value)}]"),
-                value,
-            )
-    except Exception as exc:  # metadata that OIIO cannot express is dropped, not fatal
-        log.debug("dropped metadata %s: %s", name, exc)
