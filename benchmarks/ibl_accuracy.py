@@ -2,7 +2,8 @@
 
     python benchmarks/ibl_accuracy.py          # with the python of the build to measure
 
-Two measurements, levels 1-4 of a cube-faces 256 chain (gltf roughness, alpha = 1/64 ... 1/4):
+Two measurements, levels 1-4 of a cube-faces 256 chain (gltf roughness, alpha = 1/64 ... 1/4),
+and for the analytic skies also their irradiance on a 32 cube (α = 1: E/π):
 
 1. ``analytic``: a 2048 x 1024 lat-long of tests/analytic.py's smooth sky, and of half of it
    plus a bright disk (tests/test_ibl.py's), against tests/ggx_reference.py's quadrature at 120
@@ -77,6 +78,12 @@ def analytic_case():
             truth = texel_mean(lambda d, a=alpha, s=smooth, c=dk: ggx_reference(d, a, s, c), size,
                                texels)  # fmt: skip
             _report(f"analytic {name}", k, alpha, _at(chain.levels[k], size, texels), truth)
+        # The irradiance map (E/π: the lobe with α = 1) of a 32 cube.
+        irr = envconv.convert(envconv.EnvMap(pixels, "latlong"), "cube-faces", size=32,
+                              irradiance=True)  # fmt: skip
+        texels = _texels(32, 200, rng, None if dk is None else dk[0])
+        truth = texel_mean(lambda d, s=smooth, c=dk: ggx_reference(d, 1.0, s, c), 32, texels)
+        _report(f"analytic {name} irradiance", 0, 1.0, _at(irr.pixels, 32, texels), truth)
 
 
 def park_case():

@@ -41,7 +41,9 @@ result has no sampling noise and no fireflies; near texels are summed one by one
 output samples share the walk (``src/core/prefilter.cpp``). Each output
 pixel averages S × S point evaluations, S chosen so that they are at most α (and 1/8
 rad) apart. The pyramid is the chain's own level 0 when that is a power-of-two cube without guard
-ring; otherwise the source is resampled onto a power-of-two cube first.
+ring. Otherwise a lat-long source at least 8 times finer than the pyramid is binned into it
+pixel by pixel (``kernels.ibl_pyramid_binned``: exact energy, a one-pixel sun at its own
+direction), and any other source is resampled onto a power-of-two cube first.
 """
 
 from __future__ import annotations
@@ -64,16 +66,18 @@ __all__ = [
     "parse_roughness",
     "ggx_levels",
     "irradiance_levels",
+    "irradiance_reads_level0",
 ]
 
 log = logging.getLogger(__name__)
 
 ROUGHNESS_MAPPINGS = ("gltf", "filament", "unreal")
 #: Expansion step bound (see src/core/ibl.h): looser for narrow lobes, where most texels are.
-#: Set against a brute-force sum over the bench's park map (nodes brighter than the mean are
-#: held tighter in the core): every level errs less there than 1.0 / 0.3 did with the older
-#: per-texel walk (docs/ibl.md).
-_TAU_NARROW, _TAU_BROAD, _NARROW_ALPHA = 1.6, 0.5, 0.1
+#: Set against brute-force integrals (benchmarks/ibl_accuracy.py; nodes brighter than the mean
+#: are held tighter in the core): at 2.4 for the narrow lobes every level of the bench's chain
+#: errs at most 0.38 % RMS and 0.75 % at worst, against the issue's 1 % and 5 %; 1.6 took 40 %
+#: longer for level 1 for errors of 0.31 % and 0.73 % (docs/ibl.md).
+_TAU_NARROW, _TAU_BROAD, _NARROW_ALPHA = 2.4, 0.5, 0.1
 _MAX_SAMPLES = 8
 _MAX_PYRAMID = 2048
 #: Texels of the finest level near n's horizon are integrated by 3 x 3 sub-samples: at 32 they
@@ -82,6 +86,8 @@ _MIN_PYRAMID = 32
 #: The cosine lobe is broad: a 64 cube resolves it, and each node's luminance-weighted mean
 #: direction still places a small sun exactly.
 _IRRADIANCE_PYRAMID = 64
+#: A lat-long source at least this many times the pyramid's face size is binned (_binnable).
+_BIN_RATIO = 8
 
 
 def roughness_levels(mapping, count: int) -> list[float]:
@@ -132,19 +138,57 @@ def _pow2(n: float) -> int:
     return 1 << max(0, math.ceil(math.log2(max(n, 1.0))))
 
 
+def _pyramid_size(to: Layout, size: float, alphas, cap=None) -> int:
+    """Face size p of the pyramid for lobes ``alphas`` on an output of ``size``: a power of two
+    at least the output's own cube resolution and about 2/α for the narrowest lobe."""
+    n_cube = size * horizon_pitch("cube-faces") / horizon_pitch(to)
+    narrowest = min((a for a in alphas if a > 0), default=1.0)
+    p = _pow2(max(n_cube, min(2.0 / narrowest, 2.0 * n_cube)))
+    return min(max(p, _MIN_PYRAMID), cap or _MAX_PYRAMID)
+
+
+def _reads_level0(to: Layout, guard: int, level0_height: int, p: int) -> bool:
+    """Whether the pyramid is summed from the chain's own level 0 (a cube of p without guard
+    ring) rather than from the source resampled onto a cube of p."""
+    return to.family == FAMILY_CUBE_GL and guard == 0 and level0_height == to.rows * p
+
+
+def irradiance_reads_level0(to, size: int, guard: int) -> bool:
+    """Whether :func:`irradiance_levels` reads the resampled level 0's colour (else it needs only
+    its shape and coverage, and the resampler may skip making it)."""
+    to = get_layout(to)
+    p = _pyramid_size(to, _irradiance_cube(to), [1.0], cap=_IRRADIANCE_PYRAMID)
+    return _reads_level0(to, guard, to.image_size(size, guard)[1], p)
+
+
+def _irradiance_cube(to: Layout) -> float:
+    return _IRRADIANCE_PYRAMID * horizon_pitch(to) / horizon_pitch("cube-faces")
+
+
+def _binnable(source: EnvMap, p: int) -> bool:
+    """Whether the pyramid of p is binned straight from the source's pixels: a lat-long without
+    guard ring whose pixels are at most 1/8 of a central level-0 texel (height ≥ 8 p), so that
+    every texel, the small ones at the cube's corners too, gathers many of them. The energy is
+    then exact and a one-pixel sun keeps its direction; coarser sources are resampled onto the
+    cube instead (up to 32 × 32 sub-samples a texel)."""
+    return (source.layout.name == "latlong" and source.guard == 0
+            and source.pixels.shape[0] >= _BIN_RATIO * p)  # fmt: skip
+
+
 def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None):
     """(pyramid, p, channels, rotation) for the prefilter: the source's cube faces (6, p, p, C)
     summed into the core's pyramid; ``rotation`` maps output directions to the pyramid's."""
     nch = level0.shape[2]
-    n_cube = size * horizon_pitch("cube-faces") / horizon_pitch(to)
-    narrowest = min((a for a in alphas if a > 0), default=1.0)
-    p = _pow2(max(n_cube, min(2.0 / narrowest, 2.0 * n_cube)))
-    p = min(max(p, _MIN_PYRAMID), cap or _MAX_PYRAMID)
-    if to.family == FAMILY_CUBE_GL and guard == 0 and level0.shape[0] == to.rows * p:
+    p = _pyramid_size(to, size, alphas, cap)
+    if _reads_level0(to, guard, level0.shape[0], p):
         from .io.textures import cube_faces
 
         faces = np.stack(cube_faces(to, level0))
         rotation = np.eye(3)
+    elif _binnable(source, p):
+        # Output direction d reads source direction rot d; a source pixel at s lands at rotᵀ s.
+        pyramid = kernels.ibl_pyramid_binned(source.pixels, np.asarray(rot, np.float64).T, p)
+        return pyramid, p, nch, np.eye(3)
     else:
         mosaic = np.empty((p, 6 * p, nch), np.float32)
         no_rips = np.zeros((1, 1, nch), np.float32)
@@ -200,7 +244,7 @@ def irradiance_levels(source: EnvMap, to, size: int, guard: int, fill: bool, rot
     pyr = _pyramid(
         source,
         to,
-        _IRRADIANCE_PYRAMID * horizon_pitch(to) / horizon_pitch("cube-faces"),
+        _irradiance_cube(to),
         guard,
         rot,
         chain[0][0],

@@ -27,7 +27,7 @@ __all__ = [
     "get_threads", "set_threads", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
-    "ibl_node_floats", "ibl_pyramid", "ibl_prefilter", "sh_project",
+    "ibl_node_floats", "ibl_pyramid", "ibl_pyramid_binned", "ibl_prefilter", "sh_project",
     "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
     "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES",
 ]  # fmt: skip
@@ -318,6 +318,18 @@ def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
     count = sum(6 * (p >> k) ** 2 for k in range(p.bit_length()))
     pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
     _core.ibl_pyramid(faces, pyramid, _threads)
+    return pyramid
+
+
+def ibl_pyramid_binned(latlong: np.ndarray, to_pyramid: np.ndarray, p: int) -> np.ndarray:
+    """:func:`ibl_pyramid` of a p-cube made by binning every pixel of a lat-long (H, 2H, C)
+    float32 (no guard ring) into the level-0 texel of its direction, turned by ``to_pyramid``
+    (3 × 3): energy exact and a one-pixel sun kept at its own direction (src/core/ibl.h)."""
+    latlong = _c(latlong, np.float32)
+    nch = latlong.shape[2]
+    count = sum(6 * (p >> k) ** 2 for k in range(int(p).bit_length()))
+    pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
+    _core.ibl_pyramid_binned(latlong, _c(to_pyramid, np.float64), int(p), pyramid, _threads)
     return pyramid
 
 

@@ -219,17 +219,18 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
         filter,
     )
     src = np.ascontiguousarray(src)
-    # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
-    rip, rip_levels, rip_row_count = source_rips(envmap, src, 1 if same_grid else n_samples,
-                                                 filter, to, size)  # fmt: skip
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
     weights = np.zeros((height, width), np.float32) if mips else None
-    kernels.resample_rows(
-        src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
-        FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
-        zeroed=True, coverage_channel=direct_alpha,
-    )  # fmt: skip
-    del rip
+    if not _level0_unused(to, size, guard_px, irradiance, needs_coverage, mips):
+        # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
+        rip, rip_levels, rip_row_count = source_rips(envmap, src, 1 if same_grid else n_samples,
+                                                     filter, to, size)  # fmt: skip
+        kernels.resample_rows(
+            src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
+            FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
+            zeroed=True, coverage_channel=direct_alpha,
+        )  # fmt: skip
+        del rip
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
         # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
@@ -273,6 +274,17 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
         pixel_type=envmap.pixel_type,
         levels=[o for o, _ in chain] if mips else None,
     )
+
+
+def _level0_unused(to: Layout, size: int, guard: int, irradiance: bool, needs_coverage: bool,
+                   mips) -> bool:
+    """True when nothing reads the resampled level 0: an irradiance map without alpha or chain
+    whose convolution is summed from the source resampled onto its own cube."""
+    if not irradiance or needs_coverage or mips:
+        return False
+    from . import ibl
+
+    return not ibl.irradiance_reads_level0(to, size, guard)
 
 
 def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False,

@@ -67,11 +67,15 @@ def test_rough_level_of_a_constant_environment_is_that_constant(layout):
     for level in chain.levels[1:]:
         valid = level[:, :, 3] > 0
         np.testing.assert_allclose(level[valid][:, :3], [[2.5, 1.0, 0.25]] * valid.sum(), rtol=1e-5)
-    irr = envconv.convert(sky, layout, size=8, irradiance=True, alpha=True)
-    valid = irr.pixels[:, :, 3] > 0
-    np.testing.assert_allclose(
-        irr.pixels[valid][:, :3], [[2.5, 1.0, 0.25]] * valid.sum(), rtol=1e-5
-    )
+    # The small sky is resampled onto the irradiance pyramid, the large one binned into it.
+    for height in (32, 512):
+        sky = envconv.EnvMap(np.full((height, 2 * height, 3), [2.5, 1.0, 0.25], np.float32),
+                             "latlong")  # fmt: skip
+        irr = envconv.convert(sky, layout, size=8, irradiance=True, alpha=True)
+        valid = irr.pixels[:, :, 3] > 0
+        np.testing.assert_allclose(
+            irr.pixels[valid][:, :3], [[2.5, 1.0, 0.25]] * valid.sum(), rtol=1e-5
+        )
 
 
 def _check_accuracy(chain, smooth, disk, mean_radiance):
@@ -179,6 +183,67 @@ def test_irradiance_matches_the_sh_irradiance_of_a_low_order_environment():
     truth = texel_mean(lambda d: evaluate(coeffs, d) / math.pi, 8, texels, samples=8)
     got = _level_texels(irr.pixels, 8, texels)
     np.testing.assert_allclose(got, truth, rtol=3e-3)
+
+
+def _pixel_sun(height, row, col, value=1e5, sub=4):
+    """A black lat-long (height × 2 height) with one pixel of ``value``, and that pixel as point
+    sources: directions (sub², 3) and solid angles (sub²) of its sub-pixels, from tests/naive."""
+    pixels = np.zeros((height, 2 * height, 3), np.float32)
+    pixels[row, col] = value
+    o = (np.arange(sub) + 0.5) / sub
+    u, v = np.meshgrid((col + o) / (2 * height), (row + o) / height)
+    dirs, _, dens = naive.uv_to_dir("latlong", u, v)
+    omega = dens * (2 / (2 * height)) * (2 / height) / sub**2
+    return envconv.EnvMap(pixels, "latlong"), dirs.reshape(-1, 3), omega.ravel()
+
+
+@pytest.mark.parametrize(("row", "col", "rotate"), [
+    (200, 333, None),   # an ordinary pixel
+    (3, 1000, None),    # next to the pole
+    (256, 128, None),   # on the horizon, where four cube faces meet at its longitude
+    (150, 700, "30,-20,10"),
+])  # fmt: skip
+def test_irradiance_of_a_one_pixel_sun_keeps_its_energy_and_direction(row, col, rotate):
+    """A 1024 × 512 lat-long is binned straight into the irradiance pyramid (ibl._binnable):
+    the sun's energy is kept exactly and it shines from its own direction, so every texel is
+    the cosine lobe of that pixel (integrated over the pixel and the texel)."""
+    source, suns, omega = _pixel_sun(512, row, col)
+    assert envconv.ibl._binnable(source, 64)
+    irr = envconv.convert(source, "cube-faces", size=16, irradiance=True, rotate=rotate)
+    if rotate is not None:
+        from envconv.rotation import parse_rotation, rotation_matrix
+
+        suns = suns @ rotation_matrix(*parse_rotation(rotate)).T  # source d lands at R d
+    texels = np.stack(np.meshgrid(np.arange(6), np.arange(16), np.arange(16), indexing="ij"),
+                      -1).reshape(-1, 3)  # fmt: skip
+
+    def lit(d):
+        return (1e5 / math.pi * np.clip(d @ suns.T, 0, None) @ omega)[:, None] * np.ones(3)
+
+    truth = texel_mean(lit, 16, texels, samples=8)
+    got = _level_texels(irr.pixels, 16, texels)
+    texel_omega = _level_texels(naive.pixel_solid_angles("cube-faces", 16, samples=8)[..., None],
+                                16, texels)[:, 0]  # fmt: skip
+    energy = (got[:, 0] * texel_omega).sum() / (truth[:, 0] * texel_omega).sum()
+    assert abs(energy - 1) < 0.005, energy
+    assert np.abs(got - truth).max() <= 0.02 * truth.max()
+    assert np.sqrt(((got - truth) ** 2).mean()) <= 0.005 * truth.max()
+
+
+def test_binned_pyramid_is_the_same_on_one_and_many_threads():
+    from envconv import kernels
+
+    source, _, _ = _pixel_sun(512, 100, 200)
+    source.pixels[...] += np.random.default_rng(3).random(source.pixels.shape, np.float32)
+    rot = np.eye(3)
+    previous = kernels.set_threads(1)
+    try:
+        one = kernels.ibl_pyramid_binned(source.pixels, rot, 64)
+        kernels.set_threads(3)
+        many = kernels.ibl_pyramid_binned(source.pixels, rot, 64)
+    finally:
+        kernels.set_threads(previous)
+    assert one.tobytes() == many.tobytes()
 
 
 def test_ggx_chain_in_ktx2_and_dds_reads_back_bit_for_bit(tmp_path):

@@ -17,6 +17,9 @@ inline double luminance(const float* px, int64_t channels) {
 }
 
 // 3-point Gauss-Legendre on [-1, 1].
+// Row bands of the source binned separately (build_pyramid_binned), then added in order.
+constexpr int64_t kBinBands = 4;
+
 constexpr double kGaussX[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
 constexpr double kGaussW[3] = {0.5555555555555556, 0.8888888888888888, 0.5555555555555556};
 
@@ -49,38 +52,85 @@ inline void put_radius(float* node, const double* m, int face, int64_t q, int64_
     node[11] = float(std::min(1.0, std::sqrt(vers * (2.0 - vers)) * (1.0 + 1e-5)));
 }
 
+// Face `face`'s direction for the face-independent vector (a, b, c) = (a, b, 1): the signed
+// permutation cube_gl::face_to_dir applies (exact, so a face's geometry is any other's, moved).
+inline void on_face(int face, const double* r, double* out) {
+    const double a = r[0], b = r[1], c = r[2];
+    switch (face) {
+        case 0: out[0] = -c, out[1] = -b, out[2] = -a; break;
+        case 1: out[0] = c, out[1] = -b, out[2] = a; break;
+        case 2: out[0] = -a, out[1] = c, out[2] = b; break;
+        case 3: out[0] = -a, out[1] = -c, out[2] = -b; break;
+        case 4: out[0] = -a, out[1] = -b, out[2] = c; break;
+        default: out[0] = a, out[1] = -b, out[2] = -c; break;
+    }
+}
+
+// Geometry of texel (i, j) of a face of p, in the face-independent frame (a, b, 1): solid
+// angle, mean direction (3-point Gauss in a and b) and the radius fields of put_radius.
+struct TexelGeometry {
+    double omega, m[3];
+    float vers, sine;
+};
+
+TexelGeometry texel_geometry(int64_t p, int64_t j, int64_t i) {
+    const double h = 1.0 / double(p);  // half a texel in (a, b)
+    const double ca = -1.0 + (2.0 * double(i) + 1.0) * h, cb = -1.0 + (2.0 * double(j) + 1.0) * h;
+    TexelGeometry g{0.0, {0.0, 0.0, 0.0}, 0.0f, 0.0f};
+    for (int u = 0; u < 3; ++u) {
+        for (int v = 0; v < 3; ++v) {
+            double a = ca + kGaussX[u] * h, b = cb + kGaussX[v] * h;
+            double w = kGaussW[u] * kGaussW[v] * h * h * cube_gl::density(0, a, b);
+            Vec3 d = normalized(a, b, 1.0);
+            g.omega += w;
+            g.m[0] += w * d.x;
+            g.m[1] += w * d.y;
+            g.m[2] += w * d.z;
+        }
+    }
+    for (double& v : g.m) v /= g.omega;
+    double len = std::sqrt(g.m[0] * g.m[0] + g.m[1] * g.m[1] + g.m[2] * g.m[2]);
+    double vers = 0.0;
+    for (int64_t y = j; y <= j + 1; ++y) {
+        for (int64_t x = i; x <= i + 1; ++x) {
+            Vec3 d = normalized(-1.0 + 2.0 * double(x) / double(p), -1.0 + 2.0 * double(y) / double(p),
+                                1.0);
+            double dx = g.m[0] / len - d.x, dy = g.m[1] / len - d.y, dz = g.m[2] / len - d.z;
+            vers = std::max(vers, 0.5 * (dx * dx + dy * dy + dz * dz));
+        }
+    }
+    vers = std::min(1.0, vers * (1.0 + 1e-5) + 1e-12);
+    g.vers = float(vers);
+    g.sine = float(std::min(1.0, std::sqrt(vers * (2.0 - vers)) * (1.0 + 1e-5)));
+    return g;
+}
+
 void build_level0(const float* faces, int64_t p, int64_t nch, float* out, int threads) {
     const int64_t stride = Pyramid::stride_for(nch), f0 = Pyramid::kFields;
-    const double h = 1.0 / double(p);  // half a texel in (a, b)
+    // Every face has the same texel geometry up to its signed permutation: map one face.
+    std::vector<TexelGeometry> geometry(size_t(p * p));
+    parallel_for(p, threads, [&](int64_t j) {
+        for (int64_t i = 0; i < p; ++i) geometry[size_t(j * p + i)] = texel_geometry(p, j, i);
+    });
     parallel_for(6 * p, threads, [&](int64_t task) {
         int face = int(task / p);
         int64_t j = task % p;
         for (int64_t i = 0; i < p; ++i) {
-            double ca = -1.0 + (2.0 * double(i) + 1.0) * h, cb = -1.0 + (2.0 * double(j) + 1.0) * h;
-            double omega = 0.0, m[3] = {0.0, 0.0, 0.0};
-            for (int u = 0; u < 3; ++u) {
-                for (int v = 0; v < 3; ++v) {
-                    double a = ca + kGaussX[u] * h, b = cb + kGaussX[v] * h;
-                    double w = kGaussW[u] * kGaussW[v] * h * h * cube_gl::density(face, a, b);
-                    Vec3 d = cube_gl::face_to_dir(face, a, b);
-                    omega += w;
-                    m[0] += w * d.x;
-                    m[1] += w * d.y;
-                    m[2] += w * d.z;
-                }
-            }
-            for (double& v : m) v /= omega;
+            const TexelGeometry& g = geometry[size_t(j * p + i)];
+            double m[3];
+            on_face(face, g.m, m);
             const float* px = faces + ((face * p + j) * p + i) * nch;
             float* node = out + ((face * p + j) * p + i) * stride;
-            node[0] = float(omega);
-            node[1] = float(omega * luminance(px, nch));
+            node[0] = float(g.omega);
+            node[1] = float(g.omega * luminance(px, nch));
             put_direction(node, 2, m);
             put_direction(node, 6, m);
-            put_radius(node, m, face, p, j, i);
+            node[10] = g.vers;
+            node[11] = g.sine;
             for (int64_t c = 0; c < nch; ++c) {
-                double sc = omega * double(px[c]);
+                double sc = g.omega * double(px[c]);
                 node[f0 + c] = float(sc);
-                // A texel is uniform: its first moment about its own mean direction is 0.
+                // A texel's radiance is uniform over it: no first moment of its own.
                 for (int k = 0; k < 3; ++k) node[f0 + nch + 3 * c + k] = 0.0f;
             }
         }
@@ -139,7 +189,105 @@ void build_parent(const float* child, int64_t q, int64_t nch, float* out, int th
     });
 }
 
+// The node fields of level-0 texel (face, j, i) from sums over the source points binned into
+// it (BinSums layout): geometry from the cube texel, radiance, luminance and their first
+// moments from the points. delta widens the radius by the source pixels' half-diagonal.
+void put_binned(float* node, const TexelGeometry& g, int face, const double* bin, int64_t nch,
+                double delta) {
+    const int64_t f0 = Pyramid::kFields;
+    double m[3], l[3];
+    on_face(face, g.m, m);
+    node[0] = float(g.omega);
+    node[1] = float(bin[0]);
+    for (int k = 0; k < 3; ++k) l[k] = bin[0] > 0.0 ? bin[1 + k] / bin[0] : m[k];
+    put_direction(node, 2, m);
+    put_direction(node, 6, l);
+    double r = 2.0 * std::asin(std::min(1.0, std::sqrt(0.5 * double(g.vers)))) + delta;
+    r = std::min(r, kPi);
+    double vers = std::min(1.0, (1.0 - std::cos(r)) * (1.0 + 1e-5) + 1e-12);
+    node[10] = float(vers);
+    node[11] = float(std::min(1.0, std::sqrt(vers * (2.0 - vers)) * (1.0 + 1e-5)));
+    for (int64_t c = 0; c < nch; ++c) {
+        const double* sums = bin + 4 + 4 * c;  // sum of w c, then of w c d
+        node[f0 + c] = float(sums[0]);
+        double sc = node[f0 + c];
+        for (int k = 0; k < 3; ++k)
+            node[f0 + nch + 3 * c + k] =
+                float(sums[1 + k] - sc * double(node[6 + k]) * double(node[9]));
+    }
+}
+
 }  // namespace
+
+void build_pyramid_binned(const float* image, int64_t height, int64_t width, int64_t nch,
+                          const Rotation& to_pyramid, int64_t p, float* out, int threads) {
+    Pyramid pyr{out, p, 0, nch};
+    for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
+    const int64_t fields = 4 + 4 * nch, bins = 6 * p * p;
+    // Fixed row bands, each with its own sums, added in order: the bytes do not depend on the
+    // thread count.
+    const int64_t bands = std::min<int64_t>(kBinBands, height);
+    std::vector<double> sums(size_t(bands * bins * fields), 0.0);
+    // Lat-long (a, b) = (-1 + 2 (i + 1/2) / W, -1 + 2 (j + 1/2) / H): lon = -pi a, lat = -pi b / 2.
+    std::vector<double> sin_lon(width), cos_lon(width);
+    for (int64_t i = 0; i < width; ++i) {
+        double lon = -kPi * (-1.0 + (2.0 * double(i) + 1.0) / double(width));
+        sin_lon[i] = std::sin(lon);
+        cos_lon[i] = std::cos(lon);
+    }
+    const double area = (2.0 / double(width)) * (2.0 / double(height));
+    parallel_for(bands, threads, [&](int64_t band) {
+        double* acc = sums.data() + band * bins * fields;
+        for (int64_t j = band * height / bands; j < (band + 1) * height / bands; ++j) {
+            double b = -1.0 + (2.0 * double(j) + 1.0) / double(height);
+            double lat = -0.5 * kPi * b, cl = std::cos(lat), sl = std::sin(lat);
+            double w = std::fabs(cl) * (0.5 * kPi * kPi) * area;
+            for (int64_t i = 0; i < width; ++i) {
+                Vec3 d = to_pyramid.apply({sin_lon[i] * cl, sl, cos_lon[i] * cl});
+                FacePoint f = cube_gl::dir_to_face(d.x, d.y, d.z);
+                int64_t bi = std::clamp<int64_t>(int64_t((f.a + 1.0) * 0.5 * double(p)), 0, p - 1);
+                int64_t bj = std::clamp<int64_t>(int64_t((f.b + 1.0) * 0.5 * double(p)), 0, p - 1);
+                double* bin = acc + ((f.face * p + bj) * p + bi) * fields;
+                const float* px = image + (j * width + i) * nch;
+                double wl = w * luminance(px, nch);
+                bin[0] += wl;
+                bin[1] += wl * d.x;
+                bin[2] += wl * d.y;
+                bin[3] += wl * d.z;
+                for (int64_t c = 0; c < nch; ++c) {
+                    double wc = w * double(px[c]);
+                    double* sc = bin + 4 + 4 * c;
+                    sc[0] += wc;
+                    sc[1] += wc * d.x;
+                    sc[2] += wc * d.y;
+                    sc[3] += wc * d.z;
+                }
+            }
+        }
+    });
+    for (int64_t band = 1; band < bands; ++band) {
+        const double* from = sums.data() + band * bins * fields;
+        for (int64_t k = 0; k < bins * fields; ++k) sums[size_t(k)] += from[k];
+    }
+    // Half the diagonal of the largest source pixel (at the equator), in radians.
+    const double delta = 0.5 * std::hypot(kPi / double(height), 2.0 * kPi / double(width));
+    std::vector<TexelGeometry> geometry(size_t(p * p));
+    parallel_for(p, threads, [&](int64_t j) {
+        for (int64_t i = 0; i < p; ++i) geometry[size_t(j * p + i)] = texel_geometry(p, j, i);
+    });
+    const int64_t stride = Pyramid::stride_for(nch);
+    parallel_for(6 * p, threads, [&](int64_t task) {
+        int face = int(task / p);
+        int64_t j = task % p;
+        for (int64_t i = 0; i < p; ++i) {
+            int64_t at = (face * p + j) * p + i;
+            put_binned(out + at * stride, geometry[size_t(j * p + i)], face,
+                       sums.data() + at * fields, nch, delta);
+        }
+    });
+    for (int s = 1; s < pyr.levels; ++s)
+        build_parent(out + pyr.offset(s - 1), p >> s, nch, out + pyr.offset(s), threads);
+}
 
 void build_pyramid(const float* faces, int64_t p, int64_t channels, float* out, int threads) {
     Pyramid pyr{out, p, 0, channels};
