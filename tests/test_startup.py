@@ -77,3 +77,32 @@ def test_the_console_script_ends_with_the_status_and_output_of_the_command(tmp_p
     assert handlers.returncode == 0
     assert handlers.stdout.splitlines()[0].startswith("latlong")
     assert handlers.stdout.splitlines()[-1] == "atexit ran"
+
+
+_BLAS_PROBE = (
+    "import os, sys\n"
+    "sys.argv = ['envconv', '--version']\n"
+    "from envconv.cli import main\n"
+    "try:\n"
+    "    main()\n"
+    "except SystemExit:\n"
+    "    pass\n"
+    "import numpy\n"
+    "print(os.environ.get('OPENBLAS_NUM_THREADS'), len(os.listdir('/proc/self/task')))\n"
+)
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc/self/task") or len(os.sched_getaffinity(0)) < 2,
+                    reason="counts the process's threads in /proc on a machine of 2+ cores")
+def test_the_command_line_starts_numpy_without_a_blas_thread_pool():
+    """``envconv`` asks OpenBLAS for no thread pool before numpy loads (a one shot ends sooner
+    and no idle BLAS thread competes with the core's); a value the user set is kept, and then
+    OpenBLAS starts its pool as usual."""
+    env = {k: v for k, v in os.environ.items() if k != "OPENBLAS_NUM_THREADS"}
+    ours = subprocess.run([sys.executable, "-c", _BLAS_PROBE], capture_output=True, text=True,
+                          env=env, check=True).stdout.splitlines()[-1].split()  # fmt: skip
+    theirs = subprocess.run([sys.executable, "-c", _BLAS_PROBE], capture_output=True, text=True,
+                            env={**env, "OPENBLAS_NUM_THREADS": "2"},
+                            check=True).stdout.splitlines()[-1].split()  # fmt: skip
+    assert ours[0] == "1" and theirs[0] == "2"
+    assert int(ours[1]) < int(theirs[1])
