@@ -166,18 +166,21 @@ def _irradiance_cube(to: Layout) -> float:
 
 
 def _binnable(source: EnvMap, p: int) -> bool:
-    """Whether the pyramid of p is binned straight from the source's pixels: a lat-long without
-    guard ring whose pixels are at most 1/8 of a central level-0 texel (height ≥ 8 p), so that
-    every texel, the small ones at the cube's corners too, gathers many of them. The energy is
+    """Whether the pyramid of p can be binned straight from the source's pixels: a lat-long
+    without guard ring of height ≥ 8 p, so that every level-0 texel gathers several pixels
+    (16 at a face's centre, about 3 at its corners, where texels are smallest). The energy is
     then exact and a one-pixel sun keeps its direction; coarser sources are resampled onto the
     cube instead (up to 32 × 32 sub-samples a texel)."""
     return (source.layout.name == "latlong" and source.guard == 0
             and source.pixels.shape[0] >= _BIN_RATIO * p)  # fmt: skip
 
 
-def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None):
+def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None,
+             bin_source=False):
     """(pyramid, p, channels, rotation) for the prefilter: the source's cube faces (6, p, p, C)
-    summed into the core's pyramid; ``rotation`` maps output directions to the pyramid's."""
+    summed into the core's pyramid; ``rotation`` maps output directions to the pyramid's.
+    ``bin_source``: a fine lat-long may be binned straight in (the cosine lobe's pyramid: its
+    corner texels hold a few source pixels each, too few for the narrow GGX lobes)."""
     nch = level0.shape[2]
     p = _pyramid_size(to, size, alphas, cap)
     if _reads_level0(to, guard, level0.shape[0], p):
@@ -185,7 +188,7 @@ def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alp
 
         faces = np.stack(cube_faces(to, level0))
         rotation = np.eye(3)
-    elif _binnable(source, p):
+    elif bin_source and _binnable(source, p):
         # Output direction d reads source direction rot d; a source pixel at s lands at rotᵀ s.
         pyramid = kernels.ibl_pyramid_binned(source.pixels, np.asarray(rot, np.float64).T, p)
         return pyramid, p, nch, np.eye(3)
@@ -250,6 +253,7 @@ def irradiance_levels(source: EnvMap, to, size: int, guard: int, fill: bool, rot
         chain[0][0],
         [1.0],
         cap=_IRRADIANCE_PYRAMID,
+        bin_source=True,
     )
     w0, h0 = chain[0][0].shape[1], chain[0][0].shape[0]
     out = []
