@@ -86,8 +86,6 @@ _MIN_PYRAMID = 32
 #: The cosine lobe is broad: a 64 cube resolves it, and each node's luminance-weighted mean
 #: direction still places a small sun exactly.
 _IRRADIANCE_PYRAMID = 64
-#: A lat-long source at least this many times the pyramid's face size is binned (_binnable).
-_BIN_RATIO = 8
 
 
 def roughness_levels(mapping, count: int) -> list[float]:
@@ -165,33 +163,43 @@ def _irradiance_cube(to: Layout) -> float:
     return _IRRADIANCE_PYRAMID * horizon_pitch(to) / horizon_pitch("cube-faces")
 
 
-def _binnable(source: EnvMap, p: int) -> bool:
-    """Whether the pyramid of p can be binned straight from the source's pixels: a lat-long
-    without guard ring of height ≥ 8 p, so that every level-0 texel gathers several pixels
-    (16 at a face's centre, about 3 at its corners, where texels are smallest). The energy is
-    then exact and a one-pixel sun keeps its direction; coarser sources are resampled onto the
-    cube instead (up to 32 × 32 sub-samples a texel)."""
-    return (source.layout.name == "latlong" and source.guard == 0
-            and source.pixels.shape[0] >= _BIN_RATIO * p)  # fmt: skip
+def _bin_points(source: EnvMap, p: int) -> int:
+    """Points per pixel side when the irradiance pyramid of p is binned straight from the
+    source's pixels, else 0: for a lat-long without guard ring of height ≥ 8 p, one point a
+    pixel (every level-0 texel then gathers several: 16 at a face's centre, about 3 at its
+    corners, where texels are smallest). Energy is then exact and a one-pixel sun keeps its
+    direction. Coarser sources and other layouts are resampled onto the cube instead.
+
+    The GGX chain's pyramid is not binned: at the bench's 2048 × 1024 → 256 it would need
+    2 × 2 points a pixel (0.15 s, against none for summing the chain's own level 0), and
+    the prefilter's own sampling of a narrow lobe (S from α) still moves a one-pixel sun's
+    energy by ~10 % at the first levels (docs/ibl.md)."""
+    height = source.pixels.shape[0]
+    if source.layout.name != "latlong" or source.guard or height < 8 * p:
+        return 0
+    return 1
 
 
 def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None,
              bin_source=False):
-    """(pyramid, p, channels, rotation) for the prefilter: the source's cube faces (6, p, p, C)
-    summed into the core's pyramid; ``rotation`` maps output directions to the pyramid's.
-    ``bin_source``: a fine lat-long may be binned straight in (the cosine lobe's pyramid: its
-    corner texels hold a few source pixels each, too few for the narrow GGX lobes)."""
+    """(pyramid, p, channels, rotation) for the prefilter: with ``bin_source`` (the irradiance
+    pyramid) the source binned into a p-cube where :func:`_bin_points` allows, else the cube
+    faces (6, p, p, C) of the chain's level 0 or of a resample, summed into the core's pyramid;
+    ``rotation`` maps output directions to the pyramid's."""
     nch = level0.shape[2]
     p = _pyramid_size(to, size, alphas, cap)
+    sub = _bin_points(source, p) if bin_source else 0
+    if sub:
+        # Output direction d reads source direction rot d; a source pixel at s lands at rotᵀ s.
+        pyramid = kernels.ibl_pyramid_binned(source.pixels, np.asarray(rot, np.float64).T, p,
+                                             sub)  # fmt: skip
+        if pyramid is not None:
+            return pyramid, p, nch, np.eye(3)
     if _reads_level0(to, guard, level0.shape[0], p):
         from .io.textures import cube_faces
 
         faces = np.stack(cube_faces(to, level0))
         rotation = np.eye(3)
-    elif bin_source and _binnable(source, p):
-        # Output direction d reads source direction rot d; a source pixel at s lands at rotᵀ s.
-        pyramid = kernels.ibl_pyramid_binned(source.pixels, np.asarray(rot, np.float64).T, p)
-        return pyramid, p, nch, np.eye(3)
     else:
         mosaic = np.empty((p, 6 * p, nch), np.float32)
         no_rips = np.zeros((1, 1, nch), np.float32)

@@ -321,16 +321,20 @@ def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
     return pyramid
 
 
-def ibl_pyramid_binned(latlong: np.ndarray, to_pyramid: np.ndarray, p: int) -> np.ndarray:
+def ibl_pyramid_binned(latlong: np.ndarray, to_pyramid: np.ndarray, p: int,
+                       sub: int = 1) -> np.ndarray | None:
     """:func:`ibl_pyramid` of a p-cube made by binning every pixel of a lat-long (H, 2H, C)
-    float32 (no guard ring) into the level-0 texel of its direction, turned by ``to_pyramid``
-    (3 × 3): energy exact and a one-pixel sun kept at its own direction (src/core/ibl.h)."""
+    float32 (no guard ring), as ``sub`` × ``sub`` points, into the level-0 texel of its
+    direction turned by ``to_pyramid`` (3 × 3): energy exact and a one-pixel sun kept at its
+    own direction (src/core/ibl.h). None when some texel received no point (too coarse a
+    source for p)."""
     latlong = _c(latlong, np.float32)
     nch = latlong.shape[2]
     count = sum(6 * (p >> k) ** 2 for k in range(int(p).bit_length()))
     pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
-    _core.ibl_pyramid_binned(latlong, _c(to_pyramid, np.float64), int(p), pyramid, _threads)
-    return pyramid
+    done = _core.ibl_pyramid_binned(latlong, _c(to_pyramid, np.float64), int(p), int(sub),
+                                    pyramid, _threads)  # fmt: skip
+    return pyramid if done else None
 
 
 def ibl_prefilter(pyramid, p, nch, geometry, scale_x, scale_y, alpha, samples, rot, fill, tau,

@@ -18,7 +18,7 @@ inline double luminance(const float* px, int64_t channels) {
 
 // 3-point Gauss-Legendre on [-1, 1].
 // Row bands of the source binned separately (build_pyramid_binned), then added in order.
-constexpr int64_t kBinBands = 4;
+constexpr int64_t kBinBands = 2;
 
 constexpr double kGaussX[3] = {-0.7745966692414834, 0.0, 0.7745966692414834};
 constexpr double kGaussW[3] = {0.5555555555555556, 0.8888888888888888, 0.5555555555555556};
@@ -189,78 +189,86 @@ void build_parent(const float* child, int64_t q, int64_t nch, float* out, int th
     });
 }
 
-// The node fields of level-0 texel (face, j, i) from sums over the source points binned into
-// it (BinSums layout): geometry from the cube texel, radiance, luminance and their first
-// moments from the points. delta widens the radius by the source pixels' half-diagonal.
-void put_binned(float* node, const TexelGeometry& g, int face, const double* bin, int64_t nch,
-                double delta) {
+// The node fields of level-0 texel (face, j, i) of a pyramid of p from the sums over the
+// source points binned into it (fields: omega, omega d, omega luminance, omega luminance d,
+// then omega c per channel): solid angle, mean directions and radiance all from the points,
+// so that a constant map stays constant and a sun keeps its direction. The radius is the
+// texel's about the points' mean, widened by delta (half a point's diagonal). Like
+// build_level0, a texel has no first moments of its own. False when no point landed in it.
+bool put_binned(float* node, const double* bin, int face, int64_t p, int64_t j, int64_t i,
+                int64_t nch, double delta) {
     const int64_t f0 = Pyramid::kFields;
+    if (!(bin[0] > 0.0)) return false;
     double m[3], l[3];
-    on_face(face, g.m, m);
-    node[0] = float(g.omega);
-    node[1] = float(bin[0]);
-    for (int k = 0; k < 3; ++k) l[k] = bin[0] > 0.0 ? bin[1 + k] / bin[0] : m[k];
+    for (int k = 0; k < 3; ++k) {
+        m[k] = bin[1 + k] / bin[0];
+        l[k] = bin[4] > 0.0 ? bin[5 + k] / bin[4] : m[k];
+    }
+    node[0] = float(bin[0]);
+    node[1] = float(bin[4]);
     put_direction(node, 2, m);
     put_direction(node, 6, l);
-    double r = 2.0 * std::asin(std::min(1.0, std::sqrt(0.5 * double(g.vers)))) + delta;
+    put_radius(node, m, face, p, j, i);
+    double r = 2.0 * std::asin(std::min(1.0, std::sqrt(0.5 * double(node[10])))) + delta;
     r = std::min(r, kPi);
     double vers = std::min(1.0, (1.0 - std::cos(r)) * (1.0 + 1e-5) + 1e-12);
     node[10] = float(vers);
     node[11] = float(std::min(1.0, std::sqrt(vers * (2.0 - vers)) * (1.0 + 1e-5)));
     for (int64_t c = 0; c < nch; ++c) {
-        const double* sums = bin + 4 + 4 * c;  // sum of w c, then of w c d
-        node[f0 + c] = float(sums[0]);
-        double sc = node[f0 + c];
-        for (int k = 0; k < 3; ++k)
-            node[f0 + nch + 3 * c + k] =
-                float(sums[1 + k] - sc * double(node[6 + k]) * double(node[9]));
+        node[f0 + c] = float(bin[8 + c]);
+        for (int k = 0; k < 3; ++k) node[f0 + nch + 3 * c + k] = 0.0f;
     }
+    return true;
 }
 
 }  // namespace
 
-void build_pyramid_binned(const float* image, int64_t height, int64_t width, int64_t nch,
-                          const Rotation& to_pyramid, int64_t p, float* out, int threads) {
+bool build_pyramid_binned(const float* image, int64_t height, int64_t width, int64_t nch,
+                          const Rotation& to_pyramid, int64_t p, int sub, float* out,
+                          int threads) {
     Pyramid pyr{out, p, 0, nch};
     for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
-    const int64_t fields = 4 + 4 * nch, bins = 6 * p * p;
+    const int64_t fields = 8 + nch, bins = 6 * p * p;
     // Fixed row bands, each with its own sums, added in order: the bytes do not depend on the
     // thread count.
     const int64_t bands = std::min<int64_t>(kBinBands, height);
     std::vector<double> sums(size_t(bands * bins * fields), 0.0);
-    // Lat-long (a, b) = (-1 + 2 (i + 1/2) / W, -1 + 2 (j + 1/2) / H): lon = -pi a, lat = -pi b / 2.
-    std::vector<double> sin_lon(width), cos_lon(width);
-    for (int64_t i = 0; i < width; ++i) {
-        double lon = -kPi * (-1.0 + (2.0 * double(i) + 1.0) / double(width));
-        sin_lon[i] = std::sin(lon);
-        cos_lon[i] = std::cos(lon);
+    // Each pixel is sub x sub points, at the centres of its sub-pixels. Lat-long
+    // (a, b) = (-1 + 2 x / W, -1 + 2 y / H) at image point (x, y): lon = -pi a, lat = -pi b / 2.
+    const int64_t sw = width * sub;
+    std::vector<double> sin_lon(sw), cos_lon(sw);
+    for (int64_t x = 0; x < sw; ++x) {
+        double lon = -kPi * (-1.0 + (2.0 * double(x) + 1.0) / double(sw));
+        sin_lon[x] = std::sin(lon);
+        cos_lon[x] = std::cos(lon);
     }
-    const double area = (2.0 / double(width)) * (2.0 / double(height));
+    const double area = (2.0 / double(sw)) * (2.0 / double(height * sub));
     parallel_for(bands, threads, [&](int64_t band) {
         double* acc = sums.data() + band * bins * fields;
         for (int64_t j = band * height / bands; j < (band + 1) * height / bands; ++j) {
-            double b = -1.0 + (2.0 * double(j) + 1.0) / double(height);
-            double lat = -0.5 * kPi * b, cl = std::cos(lat), sl = std::sin(lat);
-            double w = std::fabs(cl) * (0.5 * kPi * kPi) * area;
-            for (int64_t i = 0; i < width; ++i) {
-                Vec3 d = to_pyramid.apply({sin_lon[i] * cl, sl, cos_lon[i] * cl});
-                FacePoint f = cube_gl::dir_to_face(d.x, d.y, d.z);
-                int64_t bi = std::clamp<int64_t>(int64_t((f.a + 1.0) * 0.5 * double(p)), 0, p - 1);
-                int64_t bj = std::clamp<int64_t>(int64_t((f.b + 1.0) * 0.5 * double(p)), 0, p - 1);
-                double* bin = acc + ((f.face * p + bj) * p + bi) * fields;
-                const float* px = image + (j * width + i) * nch;
-                double wl = w * luminance(px, nch);
-                bin[0] += wl;
-                bin[1] += wl * d.x;
-                bin[2] += wl * d.y;
-                bin[3] += wl * d.z;
-                for (int64_t c = 0; c < nch; ++c) {
-                    double wc = w * double(px[c]);
-                    double* sc = bin + 4 + 4 * c;
-                    sc[0] += wc;
-                    sc[1] += wc * d.x;
-                    sc[2] += wc * d.y;
-                    sc[3] += wc * d.z;
+            for (int sy = 0; sy < sub; ++sy) {
+                double b = -1.0 + (2.0 * double(j * sub + sy) + 1.0) / double(height * sub);
+                double lat = -0.5 * kPi * b, cl = std::cos(lat), sl = std::sin(lat);
+                double w = std::fabs(cl) * (0.5 * kPi * kPi) * area;
+                for (int64_t x = 0; x < sw; ++x) {
+                    Vec3 d = to_pyramid.apply({sin_lon[x] * cl, sl, cos_lon[x] * cl});
+                    FacePoint f = cube_gl::dir_to_face(d.x, d.y, d.z);
+                    int64_t bi =
+                        std::clamp<int64_t>(int64_t((f.a + 1.0) * 0.5 * double(p)), 0, p - 1);
+                    int64_t bj =
+                        std::clamp<int64_t>(int64_t((f.b + 1.0) * 0.5 * double(p)), 0, p - 1);
+                    double* bin = acc + ((f.face * p + bj) * p + bi) * fields;
+                    const float* px = image + (j * width + x / sub) * nch;
+                    double wl = w * luminance(px, nch);
+                    bin[0] += w;
+                    bin[1] += w * d.x;
+                    bin[2] += w * d.y;
+                    bin[3] += w * d.z;
+                    bin[4] += wl;
+                    bin[5] += wl * d.x;
+                    bin[6] += wl * d.y;
+                    bin[7] += wl * d.z;
+                    for (int64_t c = 0; c < nch; ++c) bin[8 + c] += w * double(px[c]);
                 }
             }
         }
@@ -269,24 +277,25 @@ void build_pyramid_binned(const float* image, int64_t height, int64_t width, int
         const double* from = sums.data() + band * bins * fields;
         for (int64_t k = 0; k < bins * fields; ++k) sums[size_t(k)] += from[k];
     }
-    // Half the diagonal of the largest source pixel (at the equator), in radians.
-    const double delta = 0.5 * std::hypot(kPi / double(height), 2.0 * kPi / double(width));
-    std::vector<TexelGeometry> geometry(size_t(p * p));
-    parallel_for(p, threads, [&](int64_t j) {
-        for (int64_t i = 0; i < p; ++i) geometry[size_t(j * p + i)] = texel_geometry(p, j, i);
-    });
+    // Half the diagonal of the largest point (a sub-pixel at the equator), in radians.
+    const double delta =
+        0.5 * std::hypot(kPi / double(height * sub), 2.0 * kPi / double(width * sub));
     const int64_t stride = Pyramid::stride_for(nch);
+    std::vector<char> filled(size_t(6 * p), 1);
     parallel_for(6 * p, threads, [&](int64_t task) {
         int face = int(task / p);
         int64_t j = task % p;
         for (int64_t i = 0; i < p; ++i) {
             int64_t at = (face * p + j) * p + i;
-            put_binned(out + at * stride, geometry[size_t(j * p + i)], face,
-                       sums.data() + at * fields, nch, delta);
+            if (!put_binned(out + at * stride, sums.data() + at * fields, face, p, j, i, nch,
+                            delta))
+                filled[size_t(task)] = 0;
         }
     });
+    if (std::find(filled.begin(), filled.end(), 0) != filled.end()) return false;
     for (int s = 1; s < pyr.levels; ++s)
         build_parent(out + pyr.offset(s - 1), p >> s, nch, out + pyr.offset(s), threads);
+    return true;
 }
 
 void build_pyramid(const float* faces, int64_t p, int64_t channels, float* out, int threads) {

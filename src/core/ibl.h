@@ -68,13 +68,14 @@ struct Pyramid {
 void build_pyramid(const float* faces, int64_t p, int64_t channels, float* out, int threads);
 
 // The pyramid of p straight from a lat-long image (height x 2 height, C channels, no guard):
-// every pixel's radiance times its solid angle (centre rule) lands in the level-0 texel that
-// holds its direction, turned by `to_pyramid`, with its luminance-weighted direction and the
-// channels' first moments. Energy is kept exactly and a one-pixel sun keeps its direction, at
-// a cost of one visit per source pixel; meant for sources much finer than the pyramid (each
-// level-0 texel then holds many pixels; see envconv/ibl.py).
-void build_pyramid_binned(const float* image, int64_t height, int64_t width, int64_t channels,
-                          const Rotation& to_pyramid, int64_t p, float* out, int threads);
+// each pixel is sub x sub points, and every point's solid angle (centre rule), radiance and
+// direction, turned by `to_pyramid`, land in the level-0 texel that holds that direction.
+// Energy is kept exactly, a one-pixel sun keeps its direction, and each texel's solid angle,
+// mean direction and radiance are its points', so a constant map stays constant. False (the
+// pyramid unfinished) when a texel received no point: the source is too coarse for p.
+bool build_pyramid_binned(const float* image, int64_t height, int64_t width, int64_t channels,
+                          const Rotation& to_pyramid, int64_t p, int sub, float* out,
+                          int threads);
 
 // One prefiltered level: every pixel of `out` (H, W, C) is the solid-angle mean over its
 // footprint (pixels scale_x x scale_y level-0 pixels wide in layout `dst`) of L_k, for

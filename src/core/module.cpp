@@ -264,17 +264,18 @@ void ibl_pyramid(Array<const float, nb::ndim<4>> faces, Array<float, nb::ndim<1>
     envconv::build_pyramid(faces.data(), p, nch, out.data(), threads);
 }
 
-void ibl_pyramid_binned(Array<const float, nb::ndim<3>> image,
-                        Array<const double, nb::shape<3, 3>> to_pyramid, int64_t p,
+bool ibl_pyramid_binned(Array<const float, nb::ndim<3>> image,
+                        Array<const double, nb::shape<3, 3>> to_pyramid, int64_t p, int sub,
                         Array<float, nb::ndim<1>> out, int threads) {
     int64_t height = image.shape(0), width = image.shape(1), nch = image.shape(2);
-    if (width != 2 * height || height < 1 || p < 1 || (p & (p - 1)) ||
+    if (width != 2 * height || height < 1 || p < 1 || (p & (p - 1)) || sub < 1 ||
         int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(nch))
         throw std::invalid_argument("image must be a lat-long (H, 2H, C), p a power of two");
     envconv::Rotation r;
     for (int k = 0; k < 9; ++k) r.m[k] = to_pyramid.data()[k];
     nb::gil_scoped_release release;
-    envconv::build_pyramid_binned(image.data(), height, width, nch, r, p, out.data(), threads);
+    return envconv::build_pyramid_binned(image.data(), height, width, nch, r, p, sub,
+                                         out.data(), threads);
 }
 
 void ibl_prefilter(Array<const float, nb::ndim<1>> pyramid, int64_t p, int64_t channels,
@@ -337,8 +338,8 @@ NB_MODULE(_core, m) {
           "face_cell"_a, "cells"_a, "points"_a, "filter"_a, "out"_a);
     m.def("level_reads", &level_reads, "rip"_a, "start"_a, "level_width"_a, "points"_a, "out"_a);
     m.def("ibl_pyramid", &ibl_pyramid, "faces"_a, "out"_a, "threads"_a);
-    m.def("ibl_pyramid_binned", &ibl_pyramid_binned, "image"_a, "to_pyramid"_a, "p"_a, "out"_a,
-          "threads"_a);
+    m.def("ibl_pyramid_binned", &ibl_pyramid_binned, "image"_a, "to_pyramid"_a, "p"_a, "sub"_a,
+          "out"_a, "threads"_a);
     m.def("ibl_prefilter", &ibl_prefilter, "pyramid"_a, "p"_a, "channels"_a, "geo"_a,
           "cell_face"_a, "cell_turns"_a, "face_cell"_a, "scale_x"_a, "scale_y"_a, "alpha"_a,
           "samples"_a, "rot"_a, "fill"_a, "tau"_a, "out"_a, "threads"_a);
