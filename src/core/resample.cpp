@@ -338,6 +338,76 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
 }
 
 // Every pixel of an interpolated tile [i0, i1) x [j0, j1) whose grid maps into source cell c00.
+// The row quadratics q (source x, y and weight in fx) of the sub-sample row at fy of a tile.
+inline void row_quadratics(const TileGrid& grid, double fy, double* q) {
+    for (int k = 0; k < 3; ++k) {
+        double q0 = lagrange3(grid[0][0][k], grid[1][0][k], grid[2][0][k], fy);
+        double q1 = lagrange3(grid[0][1][k], grid[1][1][k], grid[2][1][k], fy);
+        double q2 = lagrange3(grid[0][2][k], grid[1][2][k], grid[2][2][k], fy);
+        q[3 * k] = q0;
+        q[3 * k + 1] = -3.0 * q0 + 4.0 * q1 - q2;
+        q[3 * k + 2] = 2.0 * q0 - 4.0 * q1 + 2.0 * q2;
+    }
+}
+
+// tiled_block_n at one sample a pixel (S = 1, 3 or 4 channels): each pixel's single tap goes
+// straight to the output, with no per-tile accumulators. The arithmetic is add_sample_row's
+// and store's, step for step, so the bytes are the same as through them.
+template <int NCH>
+void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const TileGrid& grid,
+                     const double* fxs, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
+                     double inv_th, Scratch& scratch) {
+    const Image& image = *win.image;
+    const int64_t iw = image.width, pixels = i1 - i0;
+    const int64_t bx0 = win.bx0, by0 = win.by0;
+    const uint64_t span_x = job.fast_taps ? uint64_t(win.bx1 - win.bx0) : 0;
+    const uint64_t span_y = job.fast_taps ? uint64_t(win.by1 - win.by0) : 0;
+    const int64_t last_safe = image.height * iw - iw - 1 - (NCH == 3 ? 1 : 0);
+    const Scratch& r = scratch;
+    double a[4];
+    for (int64_t j = j0; j < j1; ++j) {
+        double q[9];
+        row_quadratics(grid, (double(j - j0) + 0.5) * inv_th, q);
+        map_row(q, fxs, pixels, win.x_scale, win.x_offset, scratch);
+        for (int64_t c = 0; c < pixels; ++c) {
+            const double ws = 0.0 + (0.0 + r.w[c]);
+            int64_t ix = int64_t(r.cx[c]), iy = int64_t(r.cy[c]);
+            int64_t flat = iy * iw + ix;
+            if (!(uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y) ||
+                !(flat < last_safe)) {
+                for (double& v : a) v = 0.0;
+                if (uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y) {
+                    const float* t0 = image.data + flat * NCH;
+                    const float* t1 = t0 + iw * NCH;
+                    for (int64_t ch = 0; ch < NCH; ++ch)
+                        a[ch] += r.k00[c] * t0[ch] + r.k10[c] * t0[NCH + ch] +
+                                 r.k01[c] * t1[ch] + r.k11[c] * t1[NCH + ch];
+                } else {
+                    slow_tap(job, win, c00, r.px[c], r.py[c], r.w[c], a, scratch);
+                }
+                store<NCH>(job.out, j, i0 + c, a, ws, 1.0);
+                continue;
+            }
+            const float* t0 = image.data + flat * NCH;
+            const float* t1 = t0 + iw * NCH;
+#if defined(__SSE2__)
+            __m128 v = _mm_mul_ps(_mm_set1_ps(float(r.k00[c])), _mm_loadu_ps(t0));
+            v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k10[c])), _mm_loadu_ps(t0 + NCH)));
+            v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k01[c])), _mm_loadu_ps(t1)));
+            v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k11[c])), _mm_loadu_ps(t1 + NCH)));
+            float part[4];
+            _mm_storeu_ps(part, _mm_add_ps(_mm_setzero_ps(), v));
+            for (int64_t ch = 0; ch < NCH; ++ch) a[ch] = 0.0 + double(part[ch]);
+#else
+            for (int64_t ch = 0; ch < NCH; ++ch)
+                a[ch] = 0.0 + (r.k00[c] * t0[ch] + r.k10[c] * t0[NCH + ch] + r.k01[c] * t1[ch] +
+                               r.k11[c] * t1[NCH + ch]);
+#endif
+            store<NCH>(job.out, j, i0 + c, a, ws, 1.0);
+        }
+    }
+}
+
 template <int NCH>
 void tiled_block_n(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
                    const TileGrid& grid, int64_t c00, Scratch& scratch) {
@@ -367,6 +437,10 @@ void tiled_block_n(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j
     double* fxs = scratch.fxs.data();
     for (int64_t c = 0; c < columns; ++c)
         fxs[c] = (double(c / nx) + (double(c % nx) + 0.5) * inv_nx) * inv_tw;
+    if (nx == 1 && ny == 1 && (NCH == 3 || NCH == 4)) {
+        single_tap_rows<NCH>(job, win, c00, grid, fxs, i0, j0, i1, j1, inv_th, scratch);
+        return;
+    }
     double* acc = scratch.tile_acc.data();  // (i1 - i0, C)
     double* wsum = scratch.tile_wsum.data();
     for (int64_t j = j0; j < j1; ++j) {
