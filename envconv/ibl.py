@@ -40,10 +40,10 @@ about their luminance-weighted mean direction, so a one-texel sun lands where it
 result has no sampling noise and no fireflies; near texels are summed one by one. Tiles of
 output samples share the walk (``src/core/prefilter.cpp``). Each output
 pixel averages S × S point evaluations, S chosen so that they are at most α (and 1/8
-rad) apart. The pyramid is the chain's own level 0 when that is a power-of-two cube without guard
-ring. Otherwise a lat-long source at least 8 times finer than the pyramid is binned into it
-pixel by pixel (``kernels.ibl_pyramid_binned``: exact energy, a one-pixel sun at its own
-direction), and any other source is resampled onto a power-of-two cube first.
+rad) apart. The irradiance pyramid is binned from the source's pixels (:func:`_bin_plan`:
+exact energy, a one-pixel sun at its own direction, any layout). A GGX chain's pyramid is its
+own level 0 when that is a power-of-two cube without guard ring; otherwise the source is
+resampled onto a power-of-two cube first.
 """
 
 from __future__ import annotations
@@ -86,6 +86,9 @@ _MIN_PYRAMID = 32
 #: The cosine lobe is broad: a 64 cube resolves it, and each node's luminance-weighted mean
 #: direction still places a small sun exactly.
 _IRRADIANCE_PYRAMID = 64
+#: At most this many points are binned into the irradiance pyramid (_bin_plan): an 8192 × 4096
+#: lat-long (33.5 M, about 0.6 s on 2 cores); larger maps are resampled onto the cube.
+_MAX_BIN_POINTS = 1 << 26
 
 
 def roughness_levels(mapping, count: int) -> list[float]:
@@ -163,36 +166,70 @@ def _irradiance_cube(to: Layout) -> float:
     return _IRRADIANCE_PYRAMID * horizon_pitch(to) / horizon_pitch("cube-faces")
 
 
-def _bin_points(source: EnvMap, p: int) -> int:
-    """Points per pixel side when the irradiance pyramid of p is binned straight from the
-    source's pixels, else 0: for a lat-long without guard ring of height ≥ 8 p, one point a
-    pixel (every level-0 texel then gathers several: 16 at a face's centre, about 3 at its
-    corners, where texels are smallest). Energy is then exact and a one-pixel sun keeps its
-    direction. Coarser sources and other layouts are resampled onto the cube instead.
+def _bin_plan(source: EnvMap, p: int) -> tuple[int, float] | None:
+    """(points a pixel side, half a point's diagonal in radians) for binning the source's pixels
+    straight into the irradiance pyramid of p, or None to resample the source onto the cube.
+
+    A pixel becomes sub × sub points (16 × 16 where only part of it is owned: a disk's rim, a
+    cell's edge), sub chosen so that points are at most 0.6 of the smallest level-0 texel (at
+    the cube's corners, 0.44 of a face centre's) apart along an axis: every texel gathers
+    several. Energy is then exact and a one-pixel sun keeps its direction. A source needing
+    more than 4 × 4 points a pixel, or over _MAX_BIN_POINTS points in all, is resampled.
 
     The GGX chain's pyramid is not binned: at the bench's 2048 × 1024 → 256 it would need
     2 × 2 points a pixel (0.15 s, against none for summing the chain's own level 0), and
     the prefilter's own sampling of a narrow lobe (S from α) still moves a one-pixel sun's
     energy by ~10 % at the first levels (docs/ibl.md)."""
-    height = source.pixels.shape[0]
-    if source.layout.name != "latlong" or source.guard or height < 8 * p:
-        return 0
-    return 1
+    if source.layout.name == "latlong" and source.guard == 0:
+        height = source.pixels.shape[0]
+        side = math.pi / height  # the largest pixel: at the equator, π/H square
+    else:
+        side = math.sqrt(2.0) * _largest_pixel_angle(source)
+    smallest = 0.44 * (math.pi / 2) / p
+    sub = max(1, math.ceil(side / (0.6 * smallest) - 1e-9))
+    pixels = source.pixels.shape[0] * source.pixels.shape[1]
+    if sub > 4 or pixels * sub * sub > _MAX_BIN_POINTS:
+        return None
+    return sub, side / sub
+
+
+def _largest_pixel_angle(source: EnvMap, grid: int = 128) -> float:
+    """The largest angle from a pixel's centre to its corners, over a grid × grid sample of the
+    source's pixels (radians): half the diagonal of its largest pixels."""
+    height, width = source.pixels.shape[:2]
+    rows = np.unique(np.linspace(0, height - 1, min(grid, height)).round().astype(int))
+    cols = np.unique(np.linspace(0, width - 1, min(grid, width)).round().astype(int))
+    j, i = np.meshgrid(rows + 0.5, cols + 0.5, indexing="ij")
+    offsets = [(0.0, 0.0), (-0.49, -0.49), (0.49, -0.49), (-0.49, 0.49), (0.49, 0.49)]
+    points = np.stack([np.stack([i + dx, j + dy], -1).reshape(-1, 2) for dx, dy in offsets])
+    geometry = kernel_geometry(source.layout, source.size, source.guard)
+    dirs, flags = kernels.map_points_to_dirs(geometry, points.reshape(-1, 2))
+    dirs, flags = dirs.reshape(5, -1, 3), flags.reshape(5, -1)
+    valid = (flags == 2).all(axis=0)
+    if not valid.any():
+        return math.pi
+    cos = np.clip((dirs[1:, valid] * dirs[0, valid]).sum(-1), -1.0, 1.0)
+    return float(np.arccos(cos).max() / 0.98)  # the corners were 0.49 of a pixel out, not 0.5
 
 
 def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None,
              bin_source=False):
     """(pyramid, p, channels, rotation) for the prefilter: with ``bin_source`` (the irradiance
-    pyramid) the source binned into a p-cube where :func:`_bin_points` allows, else the cube
+    pyramid) the source binned into a p-cube where :func:`_bin_plan` allows, else the cube
     faces (6, p, p, C) of the chain's level 0 or of a resample, summed into the core's pyramid;
     ``rotation`` maps output directions to the pyramid's."""
     nch = level0.shape[2]
     p = _pyramid_size(to, size, alphas, cap)
-    sub = _bin_points(source, p) if bin_source else 0
-    if sub:
+    plan = _bin_plan(source, p) if bin_source else None
+    if plan is not None:
         # Output direction d reads source direction rot d; a source pixel at s lands at rotᵀ s.
-        pyramid = kernels.ibl_pyramid_binned(source.pixels, np.asarray(rot, np.float64).T, p,
-                                             sub)  # fmt: skip
+        to_pyramid = np.asarray(rot, np.float64).T
+        if source.layout.name == "latlong" and source.guard == 0:
+            pyramid = kernels.ibl_pyramid_binned(source.pixels, to_pyramid, p, plan[0])
+        else:
+            geometry = kernel_geometry(source.layout, source.size, source.guard)
+            pyramid = kernels.ibl_pyramid_binned_any(source.pixels, geometry, to_pyramid, p,
+                                                     *plan)  # fmt: skip
         if pyramid is not None:
             return pyramid, p, nch, np.eye(3)
     if _reads_level0(to, guard, level0.shape[0], p):

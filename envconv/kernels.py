@@ -27,7 +27,7 @@ __all__ = [
     "get_threads", "set_threads", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
-    "ibl_node_floats", "ibl_pyramid", "ibl_pyramid_binned", "ibl_prefilter", "sh_project",
+    "ibl_node_floats", "ibl_pyramid", "ibl_pyramid_binned", "ibl_pyramid_binned_any", "ibl_prefilter", "sh_project",
     "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
     "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES",
 ]  # fmt: skip
@@ -334,6 +334,21 @@ def ibl_pyramid_binned(latlong: np.ndarray, to_pyramid: np.ndarray, p: int,
     pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
     done = _core.ibl_pyramid_binned(latlong, _c(to_pyramid, np.float64), int(p), int(sub),
                                     pyramid, _threads)  # fmt: skip
+    return pyramid if done else None
+
+
+def ibl_pyramid_binned_any(pixels: np.ndarray, geometry, to_pyramid: np.ndarray, p: int,
+                           sub: int, delta: float) -> np.ndarray | None:
+    """:func:`ibl_pyramid_binned` for a map of any layout (``geometry`` from
+    :func:`envconv.geometry.kernel_geometry`): each owned pixel as ``sub`` × ``sub`` points
+    (16 × 16 where only part of it is owned); ``delta`` bounds half a point's diagonal
+    (radians). None when some texel received no point."""
+    pixels = _c(pixels, np.float32)
+    nch = pixels.shape[2]
+    count = sum(6 * (p >> k) ** 2 for k in range(int(p).bit_length()))
+    pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
+    done = _core.ibl_pyramid_binned_any(pixels, *_geo(geometry), _c(to_pyramid, np.float64),
+                                        int(p), int(sub), float(delta), pyramid, _threads)  # fmt: skip
     return pyramid if done else None
 
 

@@ -204,11 +204,11 @@ def _pixel_sun(height, row, col, value=1e5, sub=4):
     (150, 700, "30,-20,10"),
 ])  # fmt: skip
 def test_irradiance_of_a_one_pixel_sun_keeps_its_energy_and_direction(row, col, rotate):
-    """A 1024 × 512 lat-long is binned straight into the irradiance pyramid (ibl._bin_points):
+    """A 1024 × 512 lat-long is binned straight into the irradiance pyramid (ibl._bin_plan):
     the sun's energy is kept exactly and it shines from its own direction, so every texel is
     the cosine lobe of that pixel (integrated over the pixel and the texel)."""
     source, suns, omega = _pixel_sun(512, row, col)
-    assert envconv.ibl._bin_points(source, 64)
+    assert envconv.ibl._bin_plan(source, 64) == (1, math.pi / 512)
     irr = envconv.convert(source, "cube-faces", size=16, irradiance=True, rotate=rotate)
     if rotate is not None:
         from envconv.rotation import parse_rotation, rotation_matrix
@@ -230,8 +230,44 @@ def test_irradiance_of_a_one_pixel_sun_keeps_its_energy_and_direction(row, col, 
     assert np.sqrt(((got - truth) ** 2).mean()) <= 0.005 * truth.max()
 
 
+@pytest.mark.parametrize(("layout", "n", "row", "col"), [
+    ("cube-faces", 128, 40, 300),   # 2 x 2 points a pixel
+    ("cube-vcross", 256, 300, 400),  # a cross: the empty cells hold no points
+    ("angular", 512, 100, 260),      # a disk: pixels cut by the rim take 16 x 16 points
+])  # fmt: skip
+def test_irradiance_of_a_one_pixel_sun_in_any_layout_keeps_its_energy(layout, n, row, col):
+    """Other layouts are binned through their own geometry (ibl._bin_plan): the energy of one
+    bright pixel is kept and shines from that pixel's own direction."""
+    width, height = naive.image_size(layout, n)
+    pixels = np.zeros((height, width, 3), np.float32)
+    pixels[row, col] = 1e5
+    source = envconv.EnvMap(pixels, layout)
+    assert envconv.ibl._bin_plan(source, 64) is not None
+    o = (np.arange(4) + 0.5) / 4
+    u, v = np.meshgrid((col + o) / width, (row + o) / height)
+    suns, valid, dens = naive.uv_to_dir(layout, u, v)
+    assert valid.all()
+    omega = (dens * (2 / n) ** 2 / 16).ravel()
+    suns = suns.reshape(-1, 3)
+    irr = envconv.convert(source, "cube-faces", size=16, irradiance=True)
+    texels = np.stack(np.meshgrid(np.arange(6), np.arange(16), np.arange(16), indexing="ij"),
+                      -1).reshape(-1, 3)  # fmt: skip
+
+    def lit(d):
+        return (1e5 / math.pi * np.clip(d @ suns.T, 0, None) @ omega)[:, None] * np.ones(3)
+
+    truth = texel_mean(lit, 16, texels, samples=8)
+    got = _level_texels(irr.pixels, 16, texels)
+    texel_omega = _level_texels(naive.pixel_solid_angles("cube-faces", 16, samples=8)[..., None],
+                                16, texels)[:, 0]  # fmt: skip
+    energy = (got[:, 0] * texel_omega).sum() / (truth[:, 0] * texel_omega).sum()
+    assert abs(energy - 1) < 0.005, energy
+    assert np.abs(got - truth).max() <= 0.02 * truth.max()
+
+
 def test_binned_pyramid_is_the_same_on_one_and_many_threads():
     from envconv import kernels
+    from envconv.geometry import kernel_geometry
 
     source, _, _ = _pixel_sun(512, 100, 200)
     source.pixels[...] += np.random.default_rng(3).random(source.pixels.shape, np.float32)
@@ -241,6 +277,16 @@ def test_binned_pyramid_is_the_same_on_one_and_many_threads():
         one = kernels.ibl_pyramid_binned(source.pixels, rot, 64, sub=2)
         kernels.set_threads(3)
         many = kernels.ibl_pyramid_binned(source.pixels, rot, 64, sub=2)
+    finally:
+        kernels.set_threads(previous)
+    assert one.tobytes() == many.tobytes()
+    cross = np.random.default_rng(4).random((512, 384, 3), np.float32)
+    geometry = kernel_geometry("cube-vcross", 128)
+    previous = kernels.set_threads(1)
+    try:
+        one = kernels.ibl_pyramid_binned_any(cross, geometry, rot, 64, 2, 0.01)
+        kernels.set_threads(3)
+        many = kernels.ibl_pyramid_binned_any(cross, geometry, rot, 64, 2, 0.01)
     finally:
         kernels.set_threads(previous)
     assert one.tobytes() == many.tobytes()

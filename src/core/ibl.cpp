@@ -223,16 +223,96 @@ bool put_binned(float* node, const double* bin, int face, int64_t p, int64_t j, 
 
 }  // namespace
 
+namespace {
+
+// Sums of points binned into the level-0 texels of a pyramid of p: per texel omega, omega d,
+// omega luminance, omega luminance d, omega c per channel (put_binned's fields), kept per
+// fixed row band of the source and added in band order, so that the bytes do not depend on
+// the thread count.
+struct Bins {
+    int64_t p, nch, fields, count, bands;
+    std::vector<double> sums;
+    Bins(int64_t p_, int64_t nch_, int64_t rows)
+        : p(p_), nch(nch_), fields(8 + nch_), count(6 * p_ * p_),
+          bands(std::min<int64_t>(kBinBands, rows)),
+          sums(size_t(bands * count * fields), 0.0) {}
+    double* band(int64_t b) { return sums.data() + b * count * fields; }
+    // Point of solid angle w and pyramid direction d, of pixel px, into band sums acc.
+    void add(double* acc, const Vec3& d, double w, const float* px) const {
+        FacePoint f = cube_gl::dir_to_face(d.x, d.y, d.z);
+        int64_t bi = std::clamp<int64_t>(int64_t((f.a + 1.0) * 0.5 * double(p)), 0, p - 1);
+        int64_t bj = std::clamp<int64_t>(int64_t((f.b + 1.0) * 0.5 * double(p)), 0, p - 1);
+        double* bin = acc + ((f.face * p + bj) * p + bi) * fields;
+        double wl = w * luminance(px, nch);
+        bin[0] += w;
+        bin[1] += w * d.x;
+        bin[2] += w * d.y;
+        bin[3] += w * d.z;
+        bin[4] += wl;
+        bin[5] += wl * d.x;
+        bin[6] += wl * d.y;
+        bin[7] += wl * d.z;
+        for (int64_t c = 0; c < nch; ++c) bin[8 + c] += w * double(px[c]);
+    }
+    // The pyramid from the sums (delta: half the diagonal of the largest point, radians).
+    // False when a texel received no point.
+    bool finish(float* out, double delta, int threads) {
+        for (int64_t b = 1; b < bands; ++b) {
+            const double* from = band(b);
+            for (int64_t k = 0; k < count * fields; ++k) sums[size_t(k)] += from[k];
+        }
+        Pyramid pyr{out, p, 0, nch};
+        for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
+        const int64_t stride = Pyramid::stride_for(nch);
+        std::vector<char> filled(size_t(6 * p), 1);
+        parallel_for(6 * p, threads, [&](int64_t task) {
+            int face = int(task / p);
+            int64_t j = task % p;
+            for (int64_t i = 0; i < p; ++i) {
+                int64_t at = (face * p + j) * p + i;
+                if (!put_binned(out + at * stride, sums.data() + at * fields, face, p, j, i, nch,
+                                delta))
+                    filled[size_t(task)] = 0;
+            }
+        });
+        if (std::find(filled.begin(), filled.end(), 0) != filled.end()) return false;
+        for (int s = 1; s < pyr.levels; ++s)
+            build_parent(out + pyr.offset(s - 1), p >> s, nch, out + pyr.offset(s), threads);
+        return true;
+    }
+};
+
+// A point (px, py) of image geometry g counts when it is valid and its direction belongs to
+// its own cell (tennisball's bands overlap); then its direction and solid-angle density.
+inline bool owned_point(const Geometry& g, double px, double py, Vec3& d, double& dens) {
+    Located at = locate(g, px, py);
+    if (!point_valid(g, at.face, at.a, at.b)) return false;
+    d = face_to_dir(g.family, at.face, at.a, at.b);
+    FacePoint back = dir_to_face(g.family, d.x, d.y, d.z);
+    if (face_to_image(g, back.face, back.a, back.b).cell != at.cell) return false;
+    dens = density(g.family, at.face, at.a, at.b);
+    return true;
+}
+
+// Points a pixel side for a pixel of g: sub where all of it is owned, else at least
+// kPartialPoints (a disk's rim, a cell's edge), as sh_project does.
+constexpr int kPartialPoints = 16;
+inline int pixel_points(const Geometry& g, int64_t i, int64_t j, int sub) {
+    int inside = 0;
+    Vec3 d;
+    double dens;
+    for (double cy : {0.01, 0.99})
+        for (double cx : {0.01, 0.99}) inside += owned_point(g, i + cx, j + cy, d, dens);
+    if (inside == 0) return 0;
+    return inside == 4 ? sub : std::max(sub, kPartialPoints);
+}
+
+}  // namespace
+
 bool build_pyramid_binned(const float* image, int64_t height, int64_t width, int64_t nch,
                           const Rotation& to_pyramid, int64_t p, int sub, float* out,
                           int threads) {
-    Pyramid pyr{out, p, 0, nch};
-    for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
-    const int64_t fields = 8 + nch, bins = 6 * p * p;
-    // Fixed row bands, each with its own sums, added in order: the bytes do not depend on the
-    // thread count.
-    const int64_t bands = std::min<int64_t>(kBinBands, height);
-    std::vector<double> sums(size_t(bands * bins * fields), 0.0);
+    Bins bins(p, nch, height);
     // Each pixel is sub x sub points, at the centres of its sub-pixels. Lat-long
     // (a, b) = (-1 + 2 x / W, -1 + 2 y / H) at image point (x, y): lon = -pi a, lat = -pi b / 2.
     const int64_t sw = width * sub;
@@ -243,59 +323,48 @@ bool build_pyramid_binned(const float* image, int64_t height, int64_t width, int
         cos_lon[x] = std::cos(lon);
     }
     const double area = (2.0 / double(sw)) * (2.0 / double(height * sub));
-    parallel_for(bands, threads, [&](int64_t band) {
-        double* acc = sums.data() + band * bins * fields;
-        for (int64_t j = band * height / bands; j < (band + 1) * height / bands; ++j) {
+    parallel_for(bins.bands, threads, [&](int64_t band) {
+        double* acc = bins.band(band);
+        for (int64_t j = band * height / bins.bands; j < (band + 1) * height / bins.bands; ++j) {
             for (int sy = 0; sy < sub; ++sy) {
                 double b = -1.0 + (2.0 * double(j * sub + sy) + 1.0) / double(height * sub);
                 double lat = -0.5 * kPi * b, cl = std::cos(lat), sl = std::sin(lat);
                 double w = std::fabs(cl) * (0.5 * kPi * kPi) * area;
-                for (int64_t x = 0; x < sw; ++x) {
-                    Vec3 d = to_pyramid.apply({sin_lon[x] * cl, sl, cos_lon[x] * cl});
-                    FacePoint f = cube_gl::dir_to_face(d.x, d.y, d.z);
-                    int64_t bi =
-                        std::clamp<int64_t>(int64_t((f.a + 1.0) * 0.5 * double(p)), 0, p - 1);
-                    int64_t bj =
-                        std::clamp<int64_t>(int64_t((f.b + 1.0) * 0.5 * double(p)), 0, p - 1);
-                    double* bin = acc + ((f.face * p + bj) * p + bi) * fields;
-                    const float* px = image + (j * width + x / sub) * nch;
-                    double wl = w * luminance(px, nch);
-                    bin[0] += w;
-                    bin[1] += w * d.x;
-                    bin[2] += w * d.y;
-                    bin[3] += w * d.z;
-                    bin[4] += wl;
-                    bin[5] += wl * d.x;
-                    bin[6] += wl * d.y;
-                    bin[7] += wl * d.z;
-                    for (int64_t c = 0; c < nch; ++c) bin[8 + c] += w * double(px[c]);
+                for (int64_t x = 0; x < sw; ++x)
+                    bins.add(acc, to_pyramid.apply({sin_lon[x] * cl, sl, cos_lon[x] * cl}), w,
+                             image + (j * width + x / sub) * nch);
+            }
+        }
+    });
+    // Half the diagonal of the largest point (a sub-pixel at the equator), in radians.
+    return bins.finish(out, 0.5 * std::hypot(kPi / double(height * sub), 2.0 * kPi / double(width * sub)),
+                       threads);
+}
+
+bool build_pyramid_binned_any(const float* image, int64_t height, int64_t width, int64_t nch,
+                              const Geometry& g, const Rotation& to_pyramid, int64_t p, int sub,
+                              double delta, float* out, int threads) {
+    Bins bins(p, nch, height);
+    const double area = (2.0 / double(g.aspect * g.n)) * (2.0 / double(g.n));
+    parallel_for(bins.bands, threads, [&](int64_t band) {
+        double* acc = bins.band(band);
+        for (int64_t j = band * height / bins.bands; j < (band + 1) * height / bins.bands; ++j) {
+            for (int64_t i = 0; i < width; ++i) {
+                const int s = pixel_points(g, i, j, sub);
+                const float* px = image + (j * width + i) * nch;
+                for (int sy = 0; sy < s; ++sy) {
+                    for (int sx = 0; sx < s; ++sx) {
+                        Vec3 d;
+                        double dens;
+                        if (!owned_point(g, i + (sx + 0.5) / s, j + (sy + 0.5) / s, d, dens))
+                            continue;
+                        bins.add(acc, to_pyramid.apply(d), dens * area / double(s * s), px);
+                    }
                 }
             }
         }
     });
-    for (int64_t band = 1; band < bands; ++band) {
-        const double* from = sums.data() + band * bins * fields;
-        for (int64_t k = 0; k < bins * fields; ++k) sums[size_t(k)] += from[k];
-    }
-    // Half the diagonal of the largest point (a sub-pixel at the equator), in radians.
-    const double delta =
-        0.5 * std::hypot(kPi / double(height * sub), 2.0 * kPi / double(width * sub));
-    const int64_t stride = Pyramid::stride_for(nch);
-    std::vector<char> filled(size_t(6 * p), 1);
-    parallel_for(6 * p, threads, [&](int64_t task) {
-        int face = int(task / p);
-        int64_t j = task % p;
-        for (int64_t i = 0; i < p; ++i) {
-            int64_t at = (face * p + j) * p + i;
-            if (!put_binned(out + at * stride, sums.data() + at * fields, face, p, j, i, nch,
-                            delta))
-                filled[size_t(task)] = 0;
-        }
-    });
-    if (std::find(filled.begin(), filled.end(), 0) != filled.end()) return false;
-    for (int s = 1; s < pyr.levels; ++s)
-        build_parent(out + pyr.offset(s - 1), p >> s, nch, out + pyr.offset(s), threads);
-    return true;
+    return bins.finish(out, delta, threads);
 }
 
 void build_pyramid(const float* faces, int64_t p, int64_t channels, float* out, int threads) {
@@ -313,32 +382,18 @@ void sh_project(const float* image, int64_t height, int64_t width, int64_t chann
     const double area = (2.0 / double(g.aspect * g.n)) * (2.0 / double(g.n));
     const double c0 = 0.28209479177387814, c1 = 0.4886025119029199, c2 = 1.0925484305920792,
                  c3 = 0.31539156525252005, c4 = 0.5462742152960396;
-    // A point counts when it is valid and its direction belongs to its own cell (tennisball's
-    // bands overlap); returns its direction and solid-angle density.
-    auto owned = [&](double px, double py, Vec3& d, double& dens) {
-        Located at = locate(g, px, py);
-        if (!point_valid(g, at.face, at.a, at.b)) return false;
-        d = face_to_dir(g.family, at.face, at.a, at.b);
-        FacePoint back = dir_to_face(g.family, d.x, d.y, d.z);
-        if (face_to_image(g, back.face, back.a, back.b).cell != at.cell) return false;
-        dens = density(g.family, at.face, at.a, at.b);
-        return true;
-    };
     parallel_for(height, threads, [&](int64_t j) {
         double* acc = rows.data() + j * terms;
         double basis[9];
         for (int64_t i = 0; i < width; ++i) {
-            int inside = 0;
+            const int s = pixel_points(g, i, j, samples);
             Vec3 d;
             double dens;
-            for (double cy : {0.01, 0.99})
-                for (double cx : {0.01, 0.99}) inside += owned(i + cx, j + cy, d, dens);
-            if (inside == 0) continue;
-            int s = inside == 4 ? samples : 16;
             double sums[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
             for (int sy = 0; sy < s; ++sy) {
                 for (int sx = 0; sx < s; ++sx) {
-                    if (!owned(i + (sx + 0.5) / s, j + (sy + 0.5) / s, d, dens)) continue;
+                    if (!owned_point(g, i + (sx + 0.5) / s, j + (sy + 0.5) / s, d, dens))
+                        continue;
                     double w = dens * area / double(s * s);
                     double x = sign_x * d.x, y = d.y, z = d.z;
                     basis[0] = c0;

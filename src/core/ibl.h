@@ -77,6 +77,13 @@ bool build_pyramid_binned(const float* image, int64_t height, int64_t width, int
                           const Rotation& to_pyramid, int64_t p, int sub, float* out,
                           int threads);
 
+// build_pyramid_binned for an image of any layout g (its cells, guard rings, disks): each pixel
+// is sub x sub points, or at least 16 x 16 where only part of it is owned (sh_project's rule);
+// delta bounds half the diagonal of a point, in radians.
+bool build_pyramid_binned_any(const float* image, int64_t height, int64_t width,
+                              int64_t channels, const Geometry& g, const Rotation& to_pyramid,
+                              int64_t p, int sub, double delta, float* out, int threads);
+
 // One prefiltered level: every pixel of `out` (H, W, C) is the solid-angle mean over its
 // footprint (pixels scale_x x scale_y level-0 pixels wide in layout `dst`) of L_k, for
 // roughness^2 = `alpha`, from `samples` x `samples` sub-samples per pixel. `rot` maps output

@@ -278,6 +278,25 @@ bool ibl_pyramid_binned(Array<const float, nb::ndim<3>> image,
                                          out.data(), threads);
 }
 
+bool ibl_pyramid_binned_any(Array<const float, nb::ndim<3>> image, GeoArray geo,
+                            TableArray cell_face, TableArray cell_turns, TableArray face_cell,
+                            Array<const double, nb::shape<3, 3>> to_pyramid, int64_t p, int sub,
+                            double delta, Array<float, nb::ndim<1>> out, int threads) {
+    auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
+    int64_t nch = image.shape(2);
+    if (int64_t(image.shape(0)) != g.rows * g.cell_height() ||
+        int64_t(image.shape(1)) != g.columns * g.cell_width())
+        throw std::invalid_argument("image does not match its layout's size");
+    if (p < 1 || (p & (p - 1)) || sub < 1 || !(delta >= 0.0) ||
+        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(nch))
+        throw std::invalid_argument("p must be a power of two and out sized for its pyramid");
+    envconv::Rotation r;
+    for (int k = 0; k < 9; ++k) r.m[k] = to_pyramid.data()[k];
+    nb::gil_scoped_release release;
+    return envconv::build_pyramid_binned_any(image.data(), image.shape(0), image.shape(1), nch, g,
+                                             r, p, sub, delta, out.data(), threads);
+}
+
 void ibl_prefilter(Array<const float, nb::ndim<1>> pyramid, int64_t p, int64_t channels,
                    GeoArray geo, TableArray cell_face, TableArray cell_turns,
                    TableArray face_cell, double scale_x, double scale_y, double alpha,
@@ -340,6 +359,9 @@ NB_MODULE(_core, m) {
     m.def("ibl_pyramid", &ibl_pyramid, "faces"_a, "out"_a, "threads"_a);
     m.def("ibl_pyramid_binned", &ibl_pyramid_binned, "image"_a, "to_pyramid"_a, "p"_a, "sub"_a,
           "out"_a, "threads"_a);
+    m.def("ibl_pyramid_binned_any", &ibl_pyramid_binned_any, "image"_a, "geo"_a, "cell_face"_a,
+          "cell_turns"_a, "face_cell"_a, "to_pyramid"_a, "p"_a, "sub"_a, "delta"_a, "out"_a,
+          "threads"_a);
     m.def("ibl_prefilter", &ibl_prefilter, "pyramid"_a, "p"_a, "channels"_a, "geo"_a,
           "cell_face"_a, "cell_turns"_a, "face_cell"_a, "scale_x"_a, "scale_y"_a, "alpha"_a,
           "samples"_a, "rot"_a, "fill"_a, "tau"_a, "out"_a, "threads"_a);
