@@ -154,11 +154,14 @@ def _reads_level0(to: Layout, guard: int, level0_height: int, p: int) -> bool:
     return to.family == FAMILY_CUBE_GL and guard == 0 and level0_height == to.rows * p
 
 
-def irradiance_reads_level0(to, size: int, guard: int) -> bool:
-    """Whether :func:`irradiance_levels` reads the resampled level 0's colour (else it needs only
-    its shape and coverage, and the resampler may skip making it)."""
+def irradiance_reads_level0(source: EnvMap, to, size: int, guard: int) -> bool:
+    """Whether :func:`irradiance_levels` of ``source`` reads the resampled level 0's colour
+    (else it needs only its shape and coverage, and the resampler may skip making it): only
+    when the source is not binned and level 0 is a cube of the pyramid's own size."""
     to = get_layout(to)
     p = _pyramid_size(to, _irradiance_cube(to), [1.0], cap=_IRRADIANCE_PYRAMID)
+    if _bin_plan(source, p) is not None:
+        return False
     return _reads_level0(to, guard, to.image_size(size, guard)[1], p)
 
 
@@ -232,7 +235,9 @@ def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alp
                                                      *plan)  # fmt: skip
         if pyramid is not None:
             return pyramid, p, nch, np.eye(3)
-    if _reads_level0(to, guard, level0.shape[0], p):
+    # A source meant for binning may have skipped level 0 (irradiance_reads_level0): if its
+    # binning fails, it is resampled below rather than read from level 0.
+    if plan is None and _reads_level0(to, guard, level0.shape[0], p):
         from .io.textures import cube_faces
 
         faces = np.stack(cube_faces(to, level0))

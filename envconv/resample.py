@@ -221,7 +221,7 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     src = np.ascontiguousarray(src)
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
     weights = np.zeros((height, width), np.float32) if mips else None
-    if not _level0_unused(to, size, guard_px, irradiance, needs_coverage, mips):
+    if not _level0_unused(envmap, to, size, guard_px, irradiance, needs_coverage, mips):
         # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
         rip, rip_levels, rip_row_count = source_rips(envmap, src, 1 if same_grid else n_samples,
                                                      filter, to, size)  # fmt: skip
@@ -276,15 +276,15 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     )
 
 
-def _level0_unused(to: Layout, size: int, guard: int, irradiance: bool, needs_coverage: bool,
-                   mips) -> bool:
+def _level0_unused(envmap: EnvMap, to: Layout, size: int, guard: int, irradiance: bool,
+                   needs_coverage: bool, mips) -> bool:
     """True when nothing reads the resampled level 0: an irradiance map without alpha or chain
-    whose convolution is summed from the source resampled onto its own cube."""
+    whose convolution is summed from the source itself (binned, or resampled onto its cube)."""
     if not irradiance or needs_coverage or mips:
         return False
     from . import ibl
 
-    return not ibl.irradiance_reads_level0(to, size, guard)
+    return not ibl.irradiance_reads_level0(envmap, to, size, guard)
 
 
 def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False,

@@ -337,7 +337,6 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
     }
 }
 
-// Every pixel of an interpolated tile [i0, i1) x [j0, j1) whose grid maps into source cell c00.
 // The row quadratics q (source x, y and weight in fx) of the sub-sample row at fy of a tile.
 inline void row_quadratics(const TileGrid& grid, double fy, double* q) {
     for (int k = 0; k < 3; ++k) {
@@ -408,6 +407,7 @@ void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const Ti
     }
 }
 
+// Every pixel of an interpolated tile [i0, i1) x [j0, j1) whose grid maps into source cell c00.
 template <int NCH>
 void tiled_block_n(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
                    const TileGrid& grid, int64_t c00, Scratch& scratch) {
@@ -449,14 +449,7 @@ void tiled_block_n(const Job& job, int64_t i0, int64_t j0, int64_t i1, int64_t j
         for (int sy = 0; sy < ny; ++sy) {
             double fy = (double(j - j0) + (sy + 0.5) * inv_ny) * inv_th;
             double q[9];
-            for (int k = 0; k < 3; ++k) {
-                double q0 = lagrange3(grid[0][0][k], grid[1][0][k], grid[2][0][k], fy);
-                double q1 = lagrange3(grid[0][1][k], grid[1][1][k], grid[2][1][k], fy);
-                double q2 = lagrange3(grid[0][2][k], grid[1][2][k], grid[2][2][k], fy);
-                q[3 * k] = q0;
-                q[3 * k + 1] = -3.0 * q0 + 4.0 * q1 - q2;
-                q[3 * k + 2] = 2.0 * q0 - 4.0 * q1 + 2.0 * q2;
-            }
+            row_quadratics(grid, fy, q);
             add_sample_row<NCH>(job, win, c00, q, fxs, i1 - i0, nx, acc, wsum, scratch);
         }
         for (int64_t i = i0; i < i1; ++i)
