@@ -48,8 +48,10 @@ struct Scratch {
     std::vector<double> fxs;                  // fx of every sub-sample column of a tile
     std::vector<double> tile_acc, tile_wsum;  // (kTile, C) and kTile
     // One row of sub-samples across a tile, mapped: source point, weight, the bilinear cell's
-    // top-left texel (as whole numbers) and its four weights.
-    std::vector<double> px, py, w, cx, cy, k00, k10, k01, k11;
+    // top-left texel (as whole numbers), and its four texel weights k00, k10, k01, k11 as the
+    // floats the blend multiplies by, four to a sub-sample.
+    std::vector<double> px, py, w, cx, cy;
+    std::vector<float> k;
     explicit Scratch(int64_t nch)
         : acc(nch),
           tmp(3 * nch, 0.0),
@@ -57,7 +59,7 @@ struct Scratch {
           tile_acc(size_t(kTile) * nch),
           tile_wsum(kTile),
           px(fxs.size() + 1), py(px.size()), w(px.size()), cx(px.size()), cy(px.size()),
-          k00(px.size()), k10(px.size()), k01(px.size()), k11(px.size()) {}
+          k(4 * px.size()) {}
 };
 
 // Write the normalised accumulator and the coverage of output pixel (i, j). NCH is the channel
@@ -212,10 +214,14 @@ constexpr double kFarTexel = 1073741824.0;
 
 // Map one row of sub-samples (fx = fxs[c], quadratics q) into scratch: the arithmetic of the
 // scalar formulas, two samples at a time with SSE2 (each lane is the same IEEE operations in
-// the same order, so the results are the scalar ones, bit for bit).
+// the same order, so the results are the scalar ones, bit for bit). kWeighted: the four texel
+// weights carry the sample's weight w (k00 = w (1 - ux) (1 - uy)); else they are the plain
+// bilinear fractions, for a pixel of one sample, where w cancels in the normalisation.
+template <bool kWeighted>
 void map_row(const double* q, const double* fxs, int64_t columns, double x_scale,
              double x_offset, Scratch& s) {
     int64_t c = 0;
+    float* k = s.k.data();
 #if defined(__SSE2__)
     const __m128d q0 = _mm_set1_pd(q[0]), q1 = _mm_set1_pd(q[1]), q2 = _mm_set1_pd(q[2]);
     const __m128d q3 = _mm_set1_pd(q[3]), q4 = _mm_set1_pd(q[4]), q5 = _mm_set1_pd(q[5]);
@@ -243,10 +249,15 @@ void map_row(const double* q, const double* fxs, int64_t columns, double x_scale
         _mm_storeu_pd(&s.cy[c], fy0);
         __m128d ux = _mm_sub_pd(tx, fx0), uy = _mm_sub_pd(ty, fy0);
         __m128d vx = _mm_sub_pd(one, ux), vy = _mm_sub_pd(one, uy);
-        _mm_storeu_pd(&s.k00[c], _mm_mul_pd(_mm_mul_pd(w, vx), vy));
-        _mm_storeu_pd(&s.k10[c], _mm_mul_pd(_mm_mul_pd(w, ux), vy));
-        _mm_storeu_pd(&s.k01[c], _mm_mul_pd(_mm_mul_pd(w, vx), uy));
-        _mm_storeu_pd(&s.k11[c], _mm_mul_pd(_mm_mul_pd(w, ux), uy));
+        if (kWeighted) {
+            vx = _mm_mul_pd(w, vx);
+            ux = _mm_mul_pd(w, ux);
+        }
+        // Both samples' k00 k10 k01 k11, rounded to float, into k[4c .. 4c + 8).
+        __m128 k0 = _mm_unpacklo_ps(_mm_cvtpd_ps(_mm_mul_pd(vx, vy)), _mm_cvtpd_ps(_mm_mul_pd(ux, vy)));
+        __m128 k1 = _mm_unpacklo_ps(_mm_cvtpd_ps(_mm_mul_pd(vx, uy)), _mm_cvtpd_ps(_mm_mul_pd(ux, uy)));
+        _mm_storeu_ps(k + 4 * c, _mm_movelh_ps(k0, k1));
+        _mm_storeu_ps(k + 4 * c + 4, _mm_movehl_ps(k1, k0));
     }
 #endif
     for (; c < columns; ++c) {
@@ -267,13 +278,38 @@ void map_row(const double* q, const double* fxs, int64_t columns, double x_scale
         fy0 -= cty < fy0 ? 1.0 : 0.0;
         s.cx[c] = fx0;
         s.cy[c] = fy0;
-        double ux = tx - fx0, uy = ty - fy0;
-        s.k00[c] = w * (1.0 - ux) * (1.0 - uy);
-        s.k10[c] = w * ux * (1.0 - uy);
-        s.k01[c] = w * (1.0 - ux) * uy;
-        s.k11[c] = w * ux * uy;
+        double ux = tx - fx0, uy = ty - fy0, vx = 1.0 - ux;
+        if (kWeighted) {
+            vx = w * vx;
+            ux = w * ux;
+        }
+        k[4 * c] = float(vx * (1.0 - uy));
+        k[4 * c + 1] = float(ux * (1.0 - uy));
+        k[4 * c + 2] = float(vx * uy);
+        k[4 * c + 3] = float(ux * uy);
     }
 }
+
+// The bilinear blend of one channel: texels t0[ch], t0[nch + ch] (row y) and t1[ch],
+// t1[nch + ch] (row y + 1) with weights k[0..4), in float, in the order of the SSE lanes of
+// blend4 (so either gives the same bits).
+inline float blend1(const float* k, const float* t0, const float* t1, int64_t nch, int64_t ch) {
+    float v = k[0] * t0[ch];
+    v = v + k[1] * t0[nch + ch];
+    v = v + k[2] * t1[ch];
+    return v + k[3] * t1[nch + ch];
+}
+
+#if defined(__SSE2__)
+// blend1 for four floats at once (the 3 or 4 channels of a texel, and what follows it).
+inline __m128 blend4(const float* k, const float* t0, const float* t1, int64_t nch) {
+    const __m128 w = _mm_loadu_ps(k);
+    __m128 v = _mm_mul_ps(_mm_shuffle_ps(w, w, 0x00), _mm_loadu_ps(t0));
+    v = _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0x55), _mm_loadu_ps(t0 + nch)));
+    v = _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0xAA), _mm_loadu_ps(t1)));
+    return _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0xFF), _mm_loadu_ps(t1 + nch)));
+}
+#endif
 
 // Add one row of sub-samples (q: the row's quadratics in fx) across a tile to the pixels'
 // accumulators acc (pixels, C) and weight sums. Fast taps of 3 or 4 channels blend 4 floats at
@@ -293,7 +329,7 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
     const uint64_t span_y = job.fast_taps ? uint64_t(win.by1 - win.by0) : 0;
     // A 4-float load at the last tap (texel flat + W + 1) must stay inside the array.
     const int64_t last_safe = image.height * iw - iw - 1 - (nch == 3 ? 1 : 0);
-    map_row(q, fxs, pixels * nx, win.x_scale, win.x_offset, scratch);
+    map_row<true>(q, fxs, pixels * nx, win.x_scale, win.x_offset, scratch);
     const Scratch& r = scratch;
     for (int64_t i = 0; i < pixels; ++i) {
         double* a = acc + i * nch;
@@ -311,19 +347,16 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
             int64_t flat = iy * iw + ix;
             const float* t0 = image.data + flat * nch;
             const float* t1 = t0 + iw * nch;
+            const float* k = &r.k[4 * c];
 #if defined(__SSE2__)
             if ((NCH == 3 || NCH == 4) && flat < last_safe) {
-                __m128 v = _mm_mul_ps(_mm_set1_ps(float(r.k00[c])), _mm_loadu_ps(t0));
-                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k10[c])), _mm_loadu_ps(t0 + nch)));
-                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k01[c])), _mm_loadu_ps(t1)));
-                v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k11[c])), _mm_loadu_ps(t1 + nch)));
-                sum = _mm_add_ps(sum, v);
+                sum = _mm_add_ps(sum, blend4(k, t0, t1, nch));
                 continue;
             }
 #endif
             for (int64_t ch = 0; ch < nch; ++ch) {
-                a[ch] += r.k00[c] * t0[ch] + r.k10[c] * t0[nch + ch] + r.k01[c] * t1[ch] +
-                         r.k11[c] * t1[nch + ch];
+                a[ch] += double(k[0]) * t0[ch] + double(k[1]) * t0[nch + ch] +
+                         double(k[2]) * t1[ch] + double(k[3]) * t1[nch + ch];
             }
         }
 #if defined(__SSE2__)
@@ -350,59 +383,59 @@ inline void row_quadratics(const TileGrid& grid, double fy, double* q) {
 }
 
 // tiled_block_n at one sample a pixel (S = 1, 3 or 4 channels): each pixel's single tap goes
-// straight to the output, with no per-tile accumulators. The arithmetic is add_sample_row's
-// and store's, step for step, so the bytes are the same as through them.
+// straight to the output, with no per-tile accumulators. A lone sample's weight w cancels in
+// the normalisation (sum w v / sum w = v), so the taps blend with the plain bilinear fractions
+// and the float result is stored as it is; w only decides, as in store, that a pixel of no
+// weight (w <= 0, or NaN) is 0, and is what out.weights records.
 template <int NCH>
 void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const TileGrid& grid,
                      const double* fxs, int64_t i0, int64_t j0, int64_t i1, int64_t j1,
                      double inv_th, Scratch& scratch) {
     const Image& image = *win.image;
+    const ResampleOutput& out = job.out;
     const int64_t iw = image.width, pixels = i1 - i0;
     const int64_t bx0 = win.bx0, by0 = win.by0;
     const uint64_t span_x = job.fast_taps ? uint64_t(win.bx1 - win.bx0) : 0;
     const uint64_t span_y = job.fast_taps ? uint64_t(win.by1 - win.by0) : 0;
     const int64_t last_safe = image.height * iw - iw - 1 - (NCH == 3 ? 1 : 0);
+    const int64_t step = out.stride ? out.stride : NCH;
     const Scratch& r = scratch;
-    double a[4];
     for (int64_t j = j0; j < j1; ++j) {
         double q[9];
         row_quadratics(grid, (double(j - j0) + 0.5) * inv_th, q);
-        map_row(q, fxs, pixels, win.x_scale, win.x_offset, scratch);
+        map_row<false>(q, fxs, pixels, win.x_scale, win.x_offset, scratch);
+        float* row = out.pixels + (j * out.width + i0) * step;
         for (int64_t c = 0; c < pixels; ++c) {
-            const double ws = 0.0 + (0.0 + r.w[c]);
-            int64_t ix = int64_t(r.cx[c]), iy = int64_t(r.cy[c]);
-            int64_t flat = iy * iw + ix;
-            if (!(uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y) ||
-                !(flat < last_safe)) {
-                for (double& v : a) v = 0.0;
-                if (uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y) {
-                    const float* t0 = image.data + flat * NCH;
-                    const float* t1 = t0 + iw * NCH;
-                    for (int64_t ch = 0; ch < NCH; ++ch)
-                        a[ch] += r.k00[c] * t0[ch] + r.k10[c] * t0[NCH + ch] +
-                                 r.k01[c] * t1[ch] + r.k11[c] * t1[NCH + ch];
-                } else {
-                    slow_tap(job, win, c00, r.px[c], r.py[c], r.w[c], a, scratch);
-                }
-                store<NCH>(job.out, j, i0 + c, a, ws, 1.0);
-                continue;
-            }
+            const double ws = r.w[c];
+            const int64_t ix = int64_t(r.cx[c]), iy = int64_t(r.cy[c]);
+            const int64_t flat = iy * iw + ix;
+            const bool in_window = uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y;
             const float* t0 = image.data + flat * NCH;
             const float* t1 = t0 + iw * NCH;
+            float* px = row + c * step;
 #if defined(__SSE2__)
-            __m128 v = _mm_mul_ps(_mm_set1_ps(float(r.k00[c])), _mm_loadu_ps(t0));
-            v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k10[c])), _mm_loadu_ps(t0 + NCH)));
-            v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k01[c])), _mm_loadu_ps(t1)));
-            v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k11[c])), _mm_loadu_ps(t1 + NCH)));
-            float part[4];
-            _mm_storeu_ps(part, _mm_add_ps(_mm_setzero_ps(), v));
-            for (int64_t ch = 0; ch < NCH; ++ch) a[ch] = 0.0 + double(part[ch]);
-#else
-            for (int64_t ch = 0; ch < NCH; ++ch)
-                a[ch] = 0.0 + (r.k00[c] * t0[ch] + r.k10[c] * t0[NCH + ch] + r.k01[c] * t1[ch] +
-                               r.k11[c] * t1[NCH + ch]);
+            if (in_window && flat < last_safe && ws > 0.0) {
+                __m128 v = blend4(&r.k[4 * c], t0, t1, NCH);
+                if (NCH == 4 && step == 4) {
+                    _mm_storeu_ps(px, v);
+                } else {
+                    float part[4];
+                    _mm_storeu_ps(part, v);
+                    for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = part[ch];
+                }
+            } else
 #endif
-            store<NCH>(job.out, j, i0 + c, a, ws, 1.0);
+            if (!(ws > 0.0)) {
+                for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = 0.0f;
+            } else if (in_window) {
+                for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = blend1(&r.k[4 * c], t0, t1, NCH, ch);
+            } else {
+                double a[4] = {0.0, 0.0, 0.0, 0.0};
+                slow_tap(job, win, c00, r.px[c], r.py[c], 1.0, a, scratch);
+                for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = float(a[ch]);
+            }
+            if (out.alpha) out.alpha[(j * out.width + i0 + c) * out.alpha_stride] = 1.0f;
+            if (out.weights) out.weights[j * out.width + i0 + c] = float(ws);
         }
     }
 }
