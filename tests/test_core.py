@@ -83,6 +83,8 @@ def noisy_sky():
     "to, options",
     [
         ("cube-vcross", {"size": 40}),
+        ("cube-vcross", {"size": 96, "samples": 1}),  # one tap a pixel, four floats stored at once
+        ("octahedral", {"size": 96, "samples": 1, "alpha": True}),
         ("cube-vcross", {"size": 24, "samples": 3, "filter": "bicubic", "alpha": True}),
         ("sphere", {"size": 48, "guard": 2, "alpha": True, "rotate": (30, 10, 5)}),
         ("paraboloid", {"size": 32, "guard": "fill", "mips": True}),

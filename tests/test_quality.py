@@ -200,3 +200,19 @@ def test_tiled_kernel_matches_naive(name, n, samples):
     expected, _ = naive.naive_convert(source, name, n, samples)
     scale = np.abs(expected).max()
     np.testing.assert_allclose(result.pixels, expected, rtol=0, atol=2e-3 * scale)
+
+
+@pytest.mark.parametrize("name, n", [("cube-vcross", 128), ("latlong", 64), ("octahedral", 96)])
+@pytest.mark.parametrize("channels, alpha", [(4, False), (3, True)])
+def test_single_sample_tiles_match_naive_as_stored(name, n, channels, alpha):
+    """One sample a pixel on the interpolated-tile path, stored four floats at once (an RGBA
+    map) or with the coverage after the colour (--alpha): each pixel is the bilinear read at
+    its centre's direction, the exact per-sample reference's, in every channel."""
+    rgb = naive.pixel_average("latlong", 128, analytic.radiance, 2)
+    source = np.concatenate([rgb, rgb[..., :1] * 0.5 + 0.25], axis=-1)[..., :channels].astype(np.float32)
+    result = envconv.convert(envconv.EnvMap(source, "latlong"), name, size=n, samples=1, alpha=alpha)
+    expected, coverage = naive.naive_convert(source, name, n, 1)
+    scale = np.abs(expected).max()
+    np.testing.assert_allclose(result.pixels[..., :channels], expected, rtol=0, atol=2e-3 * scale)
+    if alpha:
+        np.testing.assert_array_equal(result.pixels[..., 3], coverage.astype(np.float32))

@@ -48,10 +48,8 @@ struct Scratch {
     std::vector<double> fxs;                  // fx of every sub-sample column of a tile
     std::vector<double> tile_acc, tile_wsum;  // (kTile, C) and kTile
     // One row of sub-samples across a tile, mapped: source point, weight, the bilinear cell's
-    // top-left texel (as whole numbers), and its four texel weights k00, k10, k01, k11 as the
-    // floats the blend multiplies by, four to a sub-sample.
-    std::vector<double> px, py, w, cx, cy;
-    std::vector<float> k;
+    // top-left texel (as whole numbers) and its four texel weights.
+    std::vector<double> px, py, w, cx, cy, k00, k10, k01, k11;
     explicit Scratch(int64_t nch)
         : acc(nch),
           tmp(3 * nch, 0.0),
@@ -59,7 +57,7 @@ struct Scratch {
           tile_acc(size_t(kTile) * nch),
           tile_wsum(kTile),
           px(fxs.size() + 1), py(px.size()), w(px.size()), cx(px.size()), cy(px.size()),
-          k(4 * px.size()) {}
+          k00(px.size()), k10(px.size()), k01(px.size()), k11(px.size()) {}
 };
 
 // Write the normalised accumulator and the coverage of output pixel (i, j). NCH is the channel
@@ -221,7 +219,6 @@ template <bool kWeighted>
 void map_row(const double* q, const double* fxs, int64_t columns, double x_scale,
              double x_offset, Scratch& s) {
     int64_t c = 0;
-    float* k = s.k.data();
 #if defined(__SSE2__)
     const __m128d q0 = _mm_set1_pd(q[0]), q1 = _mm_set1_pd(q[1]), q2 = _mm_set1_pd(q[2]);
     const __m128d q3 = _mm_set1_pd(q[3]), q4 = _mm_set1_pd(q[4]), q5 = _mm_set1_pd(q[5]);
@@ -253,11 +250,10 @@ void map_row(const double* q, const double* fxs, int64_t columns, double x_scale
             vx = _mm_mul_pd(w, vx);
             ux = _mm_mul_pd(w, ux);
         }
-        // Both samples' k00 k10 k01 k11, rounded to float, into k[4c .. 4c + 8).
-        __m128 k0 = _mm_unpacklo_ps(_mm_cvtpd_ps(_mm_mul_pd(vx, vy)), _mm_cvtpd_ps(_mm_mul_pd(ux, vy)));
-        __m128 k1 = _mm_unpacklo_ps(_mm_cvtpd_ps(_mm_mul_pd(vx, uy)), _mm_cvtpd_ps(_mm_mul_pd(ux, uy)));
-        _mm_storeu_ps(k + 4 * c, _mm_movelh_ps(k0, k1));
-        _mm_storeu_ps(k + 4 * c + 4, _mm_movehl_ps(k1, k0));
+        _mm_storeu_pd(&s.k00[c], _mm_mul_pd(vx, vy));
+        _mm_storeu_pd(&s.k10[c], _mm_mul_pd(ux, vy));
+        _mm_storeu_pd(&s.k01[c], _mm_mul_pd(vx, uy));
+        _mm_storeu_pd(&s.k11[c], _mm_mul_pd(ux, uy));
     }
 #endif
     for (; c < columns; ++c) {
@@ -283,31 +279,31 @@ void map_row(const double* q, const double* fxs, int64_t columns, double x_scale
             vx = w * vx;
             ux = w * ux;
         }
-        k[4 * c] = float(vx * (1.0 - uy));
-        k[4 * c + 1] = float(ux * (1.0 - uy));
-        k[4 * c + 2] = float(vx * uy);
-        k[4 * c + 3] = float(ux * uy);
+        s.k00[c] = vx * (1.0 - uy);
+        s.k10[c] = ux * (1.0 - uy);
+        s.k01[c] = vx * uy;
+        s.k11[c] = ux * uy;
     }
 }
 
-// The bilinear blend of one channel: texels t0[ch], t0[nch + ch] (row y) and t1[ch],
-// t1[nch + ch] (row y + 1) with weights k[0..4), in float, in the order of the SSE lanes of
-// blend4 (so either gives the same bits).
-inline float blend1(const float* k, const float* t0, const float* t1, int64_t nch, int64_t ch) {
-    float v = k[0] * t0[ch];
-    v = v + k[1] * t0[nch + ch];
-    v = v + k[2] * t1[ch];
-    return v + k[3] * t1[nch + ch];
+// The bilinear blend of one channel of sample c of a mapped row: texels t0[ch], t0[nch + ch]
+// (row y) and t1[ch], t1[nch + ch] (row y + 1) with its weights rounded to float, in float, in
+// the order of blend4's SSE lanes (so either gives the same bits).
+inline float blend1(const Scratch& r, int64_t c, const float* t0, const float* t1, int64_t nch,
+                    int64_t ch) {
+    float v = float(r.k00[c]) * t0[ch];
+    v = v + float(r.k10[c]) * t0[nch + ch];
+    v = v + float(r.k01[c]) * t1[ch];
+    return v + float(r.k11[c]) * t1[nch + ch];
 }
 
 #if defined(__SSE2__)
 // blend1 for four floats at once (the 3 or 4 channels of a texel, and what follows it).
-inline __m128 blend4(const float* k, const float* t0, const float* t1, int64_t nch) {
-    const __m128 w = _mm_loadu_ps(k);
-    __m128 v = _mm_mul_ps(_mm_shuffle_ps(w, w, 0x00), _mm_loadu_ps(t0));
-    v = _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0x55), _mm_loadu_ps(t0 + nch)));
-    v = _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0xAA), _mm_loadu_ps(t1)));
-    return _mm_add_ps(v, _mm_mul_ps(_mm_shuffle_ps(w, w, 0xFF), _mm_loadu_ps(t1 + nch)));
+inline __m128 blend4(const Scratch& r, int64_t c, const float* t0, const float* t1, int64_t nch) {
+    __m128 v = _mm_mul_ps(_mm_set1_ps(float(r.k00[c])), _mm_loadu_ps(t0));
+    v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k10[c])), _mm_loadu_ps(t0 + nch)));
+    v = _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k01[c])), _mm_loadu_ps(t1)));
+    return _mm_add_ps(v, _mm_mul_ps(_mm_set1_ps(float(r.k11[c])), _mm_loadu_ps(t1 + nch)));
 }
 #endif
 
@@ -347,16 +343,15 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
             int64_t flat = iy * iw + ix;
             const float* t0 = image.data + flat * nch;
             const float* t1 = t0 + iw * nch;
-            const float* k = &r.k[4 * c];
 #if defined(__SSE2__)
             if ((NCH == 3 || NCH == 4) && flat < last_safe) {
-                sum = _mm_add_ps(sum, blend4(k, t0, t1, nch));
+                sum = _mm_add_ps(sum, blend4(r, c, t0, t1, nch));
                 continue;
             }
 #endif
             for (int64_t ch = 0; ch < nch; ++ch) {
-                a[ch] += double(k[0]) * t0[ch] + double(k[1]) * t0[nch + ch] +
-                         double(k[2]) * t1[ch] + double(k[3]) * t1[nch + ch];
+                a[ch] += r.k00[c] * t0[ch] + r.k10[c] * t0[nch + ch] + r.k01[c] * t1[ch] +
+                         r.k11[c] * t1[nch + ch];
             }
         }
 #if defined(__SSE2__)
@@ -415,7 +410,7 @@ void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const Ti
             float* px = row + c * step;
 #if defined(__SSE2__)
             if (in_window && flat < last_safe && ws > 0.0) {
-                __m128 v = blend4(&r.k[4 * c], t0, t1, NCH);
+                __m128 v = blend4(r, c, t0, t1, NCH);
                 if (NCH == 4 && step == 4) {
                     _mm_storeu_ps(px, v);
                 } else {
@@ -428,7 +423,7 @@ void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const Ti
             if (!(ws > 0.0)) {
                 for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = 0.0f;
             } else if (in_window) {
-                for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = blend1(&r.k[4 * c], t0, t1, NCH, ch);
+                for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = blend1(r, c, t0, t1, NCH, ch);
             } else {
                 double a[4] = {0.0, 0.0, 0.0, 0.0};
                 slow_tap(job, win, c00, r.px[c], r.py[c], 1.0, a, scratch);
