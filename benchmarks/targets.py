@@ -23,9 +23,12 @@ Rows (``--rows``, comma-separated; default all, in this order):
 * ``oneshot``: ``envconv convert`` lat-long 2048×1024 float zip EXR → cube-vcross 512, zip and
   ``--compression none`` (whole processes, first round unreported), both over peer_py360.py's
   zip one shot, as in the issue (whose "today" ratios, 0.79–0.81 and 0.50, are over one peer
-  figure); the ratio over the peer writing uncompressed too is printed above the table.
+  figure); the ratio over the peer writing uncompressed too is printed above the table, and so
+  is the floor (floor_oneshot.py: the file read and a cross written, with no conversion, by
+  OpenImageIO and by OpenEXR's own API), which no converter on these libraries can beat.
 * ``batch``: ``envconv batch`` of 20 such files, ``-j 2``, zip: wall time per file over the
-  peer's zip one shot.
+  peer's zip one shot; its floor too (the files read and crosses written, one thread each, in
+  two processes side by side).
 * ``big``: 16384×8192 float lat-long (zip EXR) → cube-vcross 4096, ``--compression none``:
   time, and the child's peak RSS over in + out pixel bytes (4.03 GB).
 * ``install``: ``pip install`` of a clone of each envconv build's git HEAD into a fresh venv,
@@ -64,6 +67,8 @@ __all__ = ["ROWS", "main"]
 ROWS = ("import", "kernel", "oneshot", "batch", "big", "install", "fresh")
 HERE = os.path.dirname(os.path.abspath(__file__))
 PEER = os.path.join(HERE, "peer_py360.py")
+FLOOR = os.path.join(HERE, "floor_oneshot.py")
+FLOOR_WRITERS = ("oiio", "openexr")
 IMPORT = "import numpy, click, envconv, envconv.cli"
 READY = "envconv.convert(envconv.EnvMap(numpy.ones((4, 8, 3), 'f4'), 'latlong'), 'cube-vcross', size=2, samples=1)"
 KERNEL_WORKER = """if True:
@@ -145,16 +150,26 @@ def oneshot_cmd(build: Build, src: str, out: str, size: int, compression: str) -
 
 
 def row_oneshot(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
+    """Both one shots of every build, and in the same rounds the floor (floor_oneshot.py, in
+    this build's interpreter): the same file read and a cross written, with no conversion."""
     src = latlong_file(os.path.join(tmp, "latlong-2048.exr"), 1024)
     times = {(b.name, c): [] for c in ("zip", "none") for b in builds}
+    times.update({(f"floor-{w}", c): [] for c in ("zip", "none") for w in FLOOR_WRITERS})
     for round_ in range(runs + 1):  # round 0 may compile and is not reported
         for (name, compression), values in times.items():
-            build = next(b for b in builds if b.name == name)
             out = os.path.join(tmp, f"oneshot-{name}-{compression}.exr")
-            elapsed = spawn(oneshot_cmd(build, src, out, 512, compression), tmp)[0]
+            if name.startswith("floor-"):
+                cmd = [sys.executable, FLOOR, src, out, "512", compression, name[len("floor-"):]]
+            else:
+                cmd = oneshot_cmd(next(b for b in builds if b.name == name), src, out, 512, compression)
+            elapsed = spawn(cmd, tmp)[0]
             if round_:
                 values.append(elapsed)
     peer = median(times.get(("peer", "zip"), []))  # the issue's divisor for both rows
+    for writer in FLOOR_WRITERS:
+        for compression in ("zip", "none"):
+            value = median(times[f"floor-{writer}", compression])
+            print(f"oneshot floor, {writer} reads and writes, {compression}, no conversion: median {value:.3f} s; ÷ peer zip {value / peer:.2f}")
     for compression, target in (("zip", 0.5), ("none", 0.32)):
         peer_same = median(times.get(("peer", compression), []))
         figures = {}
@@ -170,11 +185,35 @@ def row_oneshot(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
         table.add(what + ", ÷ py360convert + OpenCV one shot (zip)", f"≤ {target}", met, **figures)
 
 
+def _batch_floor(inputs: str, out: str, writer: str) -> float:
+    """Wall seconds per file of the batch's floor: floor_oneshot.py --each in two processes
+    side by side (as ``-j 2``), each reading and writing every other file with one thread."""
+    os.makedirs(out, exist_ok=True)
+    names = sorted(os.listdir(inputs))
+    start = time.perf_counter()
+    procs = []
+    for half in (names[0::2], names[1::2]):
+        pairs = [p for n in half for p in (os.path.join(inputs, n), os.path.join(out, n))]
+        procs.append(subprocess.Popen([sys.executable, FLOOR, "--each", "512", "zip", writer, *pairs],
+                                      stdout=subprocess.DEVNULL))  # fmt: skip
+    if any(p.wait() for p in procs):
+        raise SystemExit(f"the batch floor ({writer}) failed")
+    return (time.perf_counter() - start) / len(names)
+
+
 def row_batch(builds: list[Build], runs: int, files: int, tmp: str, table: Table) -> None:
+    """The batch of every build, and in the same rounds the floor of a batch (_batch_floor)."""
     inputs = batch_inputs(os.path.join(tmp, "batch-in"), files)
     src = os.path.join(inputs, sorted(os.listdir(inputs))[0])
     times = {b.name: [] for b in builds}
+    floors = {w: [] for w in FLOOR_WRITERS}
     for round_ in range(runs + 1):  # round 0 warms the caches and is not reported
+        for writer, values in floors.items():
+            out = os.path.join(tmp, f"batch-floor-{writer}")
+            remove(out)
+            per_file = _batch_floor(inputs, out, writer)
+            if round_:
+                values.append(per_file)
         for build in builds:
             out = os.path.join(tmp, f"batch-{build.name}")
             remove(out)
@@ -187,6 +226,8 @@ def row_batch(builds: list[Build], runs: int, files: int, tmp: str, table: Table
             if round_:
                 times[build.name].extend(per_file)
     peer = median(times.get("peer", []))
+    for writer, values in floors.items():
+        print(f"batch floor, {writer} reads and writes, zip, no conversion, 2 processes: {median(values):.3f} s per file; ÷ peer one shot {median(values) / peer:.2f}")
     figures = {"peer": f"{peer:.3f} s one shot"} if not math.isnan(peer) else {}
     for name, values in times.items():
         if name != "peer":
