@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 import envconv
-from envconv import kernels
+from envconv import _core, kernels
 from envconv.geometry import kernel_geometry
 from envconv.layouts import get_layout
 
@@ -103,6 +103,29 @@ def test_one_thread_and_many_threads_give_identical_bytes(noisy_sky, to, options
     assert one.pixels.tobytes() == many.pixels.tobytes()
     for a, b in zip(one.levels or [], many.levels or [], strict=True):
         assert a.tobytes() == b.tobytes()
+
+
+@pytest.mark.parametrize(
+    "to, options",
+    [
+        ("cube-vcross", {"size": 96, "samples": 1}),
+        ("cube-vcross", {"size": 40, "samples": 4, "alpha": True}),
+        ("octahedral", {"size": 64, "samples": 3, "rotate": (30, 10, 5)}),
+        ("latlong", {"size": 16}),  # auto samples on the rip-map
+    ],
+)
+def test_avx_and_sse2_row_mappings_give_identical_bytes(noisy_sky, to, options):
+    """The resampler maps rows four samples at a time with AVX where the CPU has it, else two
+    at a time with SSE2; both must write the same bytes, so that machines with and without AVX
+    convert a map identically. (On a CPU without AVX both runs take SSE2.)"""
+    previous = _core.set_wide_rows(False)
+    try:
+        narrow = envconv.convert(noisy_sky, to, **options)
+        _core.set_wide_rows(True)
+        wide = envconv.convert(noisy_sky, to, **options)
+    finally:
+        _core.set_wide_rows(previous)
+    assert narrow.pixels.tobytes() == wide.pixels.tobytes()
 
 
 def test_threads_come_from_the_environment(monkeypatch):

@@ -39,6 +39,10 @@ struct RipMap {
 void resample(const Image& src, const RipMap& rip, const Conversion& cv, int samples, int filter,
               const ResampleOutput& out, int threads, int64_t* progress = nullptr);
 
+// Let the resampler map rows with AVX where the CPU has it (the default), or not; returns the
+// previous setting. Either gives the same bytes (tests/test_core.py compares them).
+bool set_wide_rows(bool allowed);
+
 // Fill rows [0, rows) and [H - rows, H) of the packed rip-map `out` (H, W - W_K, C) from `src`.
 void fill_rips(const Image& src, int levels, int64_t rows, float* out, int threads);
 

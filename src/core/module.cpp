@@ -369,6 +369,7 @@ NB_MODULE(_core, m) {
           "face_cell"_a, "samples"_a, "sign_x"_a, "out"_a, "threads"_a);
     // Stop (true) every running kernel at its next task, or let kernels run again (false).
     m.def("cancel", [](bool on) { envconv::cancel_requested.store(on); }, "on"_a);
+    m.def("set_wide_rows", &envconv::set_wide_rows, "allowed"_a);
     m.attr("IBL_NODE_FIELDS") = envconv::Pyramid::kFields;
     m.attr("TILE") = envconv::kTile;  // output rows per band: the progress counter's unit
     m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;

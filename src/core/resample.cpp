@@ -12,12 +12,17 @@
 // a few rows whatever the image size. Within a band, tiles (tiles.h) interpolate the map; tiles
 // that fail their checks split, and blocks that still fail map every sub-sample exactly.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <vector>
 
 #if defined(__SSE2__)
 #include <emmintrin.h>
+#endif
+#if defined(__x86_64__) && defined(__GNUC__)
+#include <immintrin.h>
+#define ENVCONV_AVX_ROWS 1  // map_row's 4-wide clone for CPUs with AVX, chosen at run time
 #endif
 
 #include "kernels.h"
@@ -210,15 +215,80 @@ void slow_tap(const Job& job, const TapWindow& win, int64_t c00, double px, doub
 // sample fails the fast path's bounds test and the slow path reads it from px, py.
 constexpr double kFarTexel = 1073741824.0;
 
+#if defined(ENVCONV_AVX_ROWS)
+// map_row's loop four samples at a time with AVX (256-bit doubles), for the CPUs that have it
+// (the build's baseline is SSE2): each lane is the same IEEE operations, in the same order, as
+// the SSE2 loop's and the scalar formulas' (no fused multiply-add), so the bytes do not depend
+// on the machine. Returns the columns it mapped (a multiple of 4); the caller does the rest.
+template <bool kWeighted>
+__attribute__((target("avx"))) int64_t map_row_avx(const double* q, const double* fxs,
+                                                   int64_t columns, double x_scale,
+                                                   double x_offset, Scratch& s) {
+    const __m256d q0 = _mm256_set1_pd(q[0]), q1 = _mm256_set1_pd(q[1]), q2 = _mm256_set1_pd(q[2]);
+    const __m256d q3 = _mm256_set1_pd(q[3]), q4 = _mm256_set1_pd(q[4]), q5 = _mm256_set1_pd(q[5]);
+    const __m256d q6 = _mm256_set1_pd(q[6]), q7 = _mm256_set1_pd(q[7]), q8 = _mm256_set1_pd(q[8]);
+    const __m256d xs = _mm256_set1_pd(x_scale), xo = _mm256_set1_pd(x_offset);
+    const __m256d half = _mm256_set1_pd(0.5), one = _mm256_set1_pd(1.0);
+    const __m256d lo = _mm256_set1_pd(-kFarTexel), hi = _mm256_set1_pd(kFarTexel);
+    int64_t c = 0;
+    for (; c + 4 <= columns; c += 4) {
+        __m256d fx = _mm256_loadu_pd(fxs + c);
+        __m256d x = _mm256_add_pd(q0, _mm256_mul_pd(fx, _mm256_add_pd(q1, _mm256_mul_pd(fx, q2))));
+        __m256d y = _mm256_add_pd(q3, _mm256_mul_pd(fx, _mm256_add_pd(q4, _mm256_mul_pd(fx, q5))));
+        __m256d w = _mm256_add_pd(q6, _mm256_mul_pd(fx, _mm256_add_pd(q7, _mm256_mul_pd(fx, q8))));
+        _mm256_storeu_pd(&s.px[c], x);
+        _mm256_storeu_pd(&s.py[c], y);
+        _mm256_storeu_pd(&s.w[c], w);
+        __m256d tx = _mm256_sub_pd(_mm256_add_pd(_mm256_mul_pd(x, xs), xo), half);
+        __m256d ty = _mm256_sub_pd(y, half);
+        __m256d ctx = _mm256_min_pd(_mm256_max_pd(tx, lo), hi);
+        __m256d cty = _mm256_min_pd(_mm256_max_pd(ty, lo), hi);
+        __m256d fx0 = _mm256_cvtepi32_pd(_mm256_cvttpd_epi32(ctx));
+        __m256d fy0 = _mm256_cvtepi32_pd(_mm256_cvttpd_epi32(cty));
+        fx0 = _mm256_sub_pd(fx0, _mm256_and_pd(_mm256_cmp_pd(ctx, fx0, _CMP_LT_OS), one));
+        fy0 = _mm256_sub_pd(fy0, _mm256_and_pd(_mm256_cmp_pd(cty, fy0, _CMP_LT_OS), one));
+        _mm256_storeu_pd(&s.cx[c], fx0);
+        _mm256_storeu_pd(&s.cy[c], fy0);
+        __m256d ux = _mm256_sub_pd(tx, fx0), uy = _mm256_sub_pd(ty, fy0);
+        __m256d vx = _mm256_sub_pd(one, ux), vy = _mm256_sub_pd(one, uy);
+        if (kWeighted) {
+            vx = _mm256_mul_pd(w, vx);
+            ux = _mm256_mul_pd(w, ux);
+        }
+        _mm256_storeu_pd(&s.k00[c], _mm256_mul_pd(vx, vy));
+        _mm256_storeu_pd(&s.k10[c], _mm256_mul_pd(ux, vy));
+        _mm256_storeu_pd(&s.k01[c], _mm256_mul_pd(vx, uy));
+        _mm256_storeu_pd(&s.k11[c], _mm256_mul_pd(ux, uy));
+    }
+    return c;
+}
+#endif
+
+// Whether map_row may take its AVX loop (set_wide_rows; the tests compare both loops).
+std::atomic<bool> wide_rows_allowed{true};
+
+#if defined(ENVCONV_AVX_ROWS)
+// True when map_row takes its AVX loop: the CPU has AVX (and the OS keeps its registers), and
+// it is allowed.
+bool wide_rows() {
+    static const bool have_avx = (__builtin_cpu_init(), __builtin_cpu_supports("avx"));
+    return have_avx && wide_rows_allowed.load(std::memory_order_relaxed);
+}
+#endif
+
 // Map one row of sub-samples (fx = fxs[c], quadratics q) into scratch: the arithmetic of the
-// scalar formulas, two samples at a time with SSE2 (each lane is the same IEEE operations in
-// the same order, so the results are the scalar ones, bit for bit). kWeighted: the four texel
+// scalar formulas, four samples at a time with AVX where the CPU has it (map_row_avx), then
+// two at a time with SSE2 (each lane is the same IEEE operations in the same order, so the
+// results are the scalar ones, bit for bit). kWeighted: the four texel
 // weights carry the sample's weight w (k00 = w (1 - ux) (1 - uy)); else they are the plain
 // bilinear fractions, for a pixel of one sample, where w cancels in the normalisation.
 template <bool kWeighted>
 void map_row(const double* q, const double* fxs, int64_t columns, double x_scale,
              double x_offset, Scratch& s) {
     int64_t c = 0;
+#if defined(ENVCONV_AVX_ROWS)
+    if (columns >= 4 && wide_rows()) c = map_row_avx<kWeighted>(q, fxs, columns, x_scale, x_offset, s);
+#endif
 #if defined(__SSE2__)
     const __m128d q0 = _mm_set1_pd(q[0]), q1 = _mm_set1_pd(q[1]), q2 = _mm_set1_pd(q[2]);
     const __m128d q3 = _mm_set1_pd(q[3]), q4 = _mm_set1_pd(q[4]), q5 = _mm_set1_pd(q[5]);
@@ -550,6 +620,8 @@ void resample_band(const Job& job, int64_t band, Scratch& scratch) {
 }
 
 }  // namespace
+
+bool set_wide_rows(bool allowed) { return wide_rows_allowed.exchange(allowed); }
 
 void resample(const Image& src, const RipMap& rip, const Conversion& cv, int samples, int filter,
               const ResampleOutput& out, int threads, int64_t* progress) {
