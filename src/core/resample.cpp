@@ -475,12 +475,11 @@ void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const Ti
             const int64_t ix = int64_t(r.cx[c]), iy = int64_t(r.cy[c]);
             const int64_t flat = iy * iw + ix;
             const bool in_window = uint64_t(ix - bx0) < span_x && uint64_t(iy - by0) < span_y;
-            const float* t0 = image.data + flat * NCH;
-            const float* t1 = t0 + iw * NCH;
             float* px = row + c * step;
 #if defined(__SSE2__)
             if (in_window && flat < last_safe && ws > 0.0) {
-                __m128 v = blend4(r, c, t0, t1, NCH);
+                const float* t0 = image.data + flat * NCH;
+                __m128 v = blend4(r, c, t0, t0 + iw * NCH, NCH);
                 if (NCH == 4 && step == 4) {
                     _mm_storeu_ps(px, v);
                 } else {
@@ -493,7 +492,9 @@ void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const Ti
             if (!(ws > 0.0)) {
                 for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = 0.0f;
             } else if (in_window) {
-                for (int64_t ch = 0; ch < NCH; ++ch) px[ch] = blend1(r, c, t0, t1, NCH, ch);
+                const float* t0 = image.data + flat * NCH;
+                for (int64_t ch = 0; ch < NCH; ++ch)
+                    px[ch] = blend1(r, c, t0, t0 + iw * NCH, NCH, ch);
             } else {
                 double a[4] = {0.0, 0.0, 0.0, 0.0};
                 slow_tap(job, win, c00, r.px[c], r.py[c], 1.0, a, scratch);
