@@ -394,7 +394,7 @@ void add_sample_row(const Job& job, const TapWindow& win, int64_t c00, const dou
     const uint64_t span_x = job.fast_taps ? uint64_t(win.bx1 - win.bx0) : 0;
     const uint64_t span_y = job.fast_taps ? uint64_t(win.by1 - win.by0) : 0;
     // A 4-float load at the last tap (texel flat + W + 1) must stay inside the array.
-    const int64_t last_safe = image.height * iw - iw - 1 - (nch == 3 ? 1 : 0);
+    [[maybe_unused]] const int64_t last_safe = image.height * iw - iw - 1 - (nch == 3 ? 1 : 0);
     map_row<true>(q, fxs, pixels * nx, win.x_scale, win.x_offset, scratch);
     const Scratch& r = scratch;
     for (int64_t i = 0; i < pixels; ++i) {
@@ -462,7 +462,7 @@ void single_tap_rows(const Job& job, const TapWindow& win, int64_t c00, const Ti
     const int64_t bx0 = win.bx0, by0 = win.by0;
     const uint64_t span_x = job.fast_taps ? uint64_t(win.bx1 - win.bx0) : 0;
     const uint64_t span_y = job.fast_taps ? uint64_t(win.by1 - win.by0) : 0;
-    const int64_t last_safe = image.height * iw - iw - 1 - (NCH == 3 ? 1 : 0);
+    [[maybe_unused]] const int64_t last_safe = image.height * iw - iw - 1 - (NCH == 3 ? 1 : 0);
     const int64_t step = out.stride ? out.stride : NCH;
     const Scratch& r = scratch;
     for (int64_t j = j0; j < j1; ++j) {
