@@ -221,3 +221,16 @@ def test_dry_run_reads_only_the_header(tmp_path):
     assert dry.exit_code == 0 and "bit depth: float" in dry.stdout and "channels: R,G,B" in dry.stdout
     real = run_cli(["convert", tmp_path / "cut.exr", tmp_path / "o.hdr", "--to", "latlong"])
     assert real.exit_code == 1 and not (tmp_path / "o.hdr").exists()
+
+
+@pytest.mark.parametrize(
+    "path",
+    ["a.exr", "A.EXR", "dir/x.tar.gz", ".hidden", "a.", "a..b", "noext", "d.d/x", "./a.hdr",
+     "a.b.", ".a.exr", "/x/y/.z.png", "sky.cube.dds"],
+)  # fmt: skip
+def test_extension_is_what_pathlib_calls_the_suffix(path):
+    from pathlib import Path
+
+    from envconv.io.formats import extension
+
+    assert extension(path) == Path(path).suffix.lower()

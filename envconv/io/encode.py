@@ -25,14 +25,13 @@ import os
 import re
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .. import color, quantize
 from ..envmap import EnvMap
-from .formats import WRITE_FORMATS, check_compression, choose_pixel_type
+from .formats import WRITE_FORMATS, check_compression, choose_pixel_type, extension
 
 __all__ = ["OutputPlan", "plan_output", "Encoded", "LazyLevel", "encode_output"]
 
@@ -78,7 +77,7 @@ def plan_output(
     ``pixel_type`` and ``metadata`` are the map's (its ``oiio:ColorSpace`` says what colour
     space its pixels are in; float data without one is taken as linear Rec.709).
     """
-    fmt = WRITE_FORMATS.get(Path(os.fspath(path)).suffix.lower(), ("",))[0]
+    fmt = WRITE_FORMATS.get(extension(path), ("",))[0]
     ptype = choose_pixel_type(os.fspath(path), pixel_type, bit_depth)
     config = color.config_for(ocio_config)
     src = color.input_colorspace_of(metadata, pixel_type, None, ocio_config)

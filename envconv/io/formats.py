@@ -5,11 +5,12 @@ No file is touched here: the tables the readers, the writers and the output plan
 
 from __future__ import annotations
 
-from pathlib import Path
+import os
 
 from ..errors import UsageError
 
-__all__ = ["COMPRESSIONS", "check_compression", "FORMATS", "CONTAINER_FORMATS", "WRITE_FORMATS", "format_of", "choose_pixel_type"]
+__all__ = ["COMPRESSIONS", "check_compression", "FORMATS", "CONTAINER_FORMATS", "WRITE_FORMATS", "extension",
+           "format_of", "choose_pixel_type"]  # fmt: skip
 
 #: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
 FORMATS = {
@@ -33,10 +34,19 @@ CONTAINER_FORMATS = {
 WRITE_FORMATS = {**FORMATS, **CONTAINER_FORMATS}
 
 
+def extension(path: str | os.PathLike) -> str:
+    """The extension of ``path``'s file name, lower-case, as pathlib's ``suffix`` finds it
+    (``".exr"``; ``""`` for none, for a name ending in a dot, and for a hidden file's leading
+    dot), without importing pathlib at every start."""
+    name = os.path.basename(os.fspath(path))
+    dot = name.rfind(".")
+    return name[dot:].lower() if 0 < dot < len(name) - 1 else ""
+
+
 def format_of(path: str):
     """The ``WRITE_FORMATS`` entry of ``path``'s extension; UsageError for an unknown one
     (an output path is an argument: exit 2 on the command line)."""
-    ext = Path(path).suffix.lower()
+    ext = extension(path)
     if ext not in WRITE_FORMATS:
         known = " ".join(sorted(WRITE_FORMATS))
         raise UsageError(

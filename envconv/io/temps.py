@@ -19,14 +19,12 @@ format by extension)::
 
 from __future__ import annotations
 
-import hashlib
 import logging
 import os
 import re
-import secrets
-import socket
 import threading
 import time
+import zlib
 
 __all__ = ["temp_for", "discard", "temp_path", "is_temp_name", "live_temps", "forget", "clean_stale",
            "FOREIGN_AGE"]  # fmt: skip
@@ -45,7 +43,11 @@ _cleaned: set[str] = set()
 
 
 def _host() -> str:
-    return hashlib.sha1(socket.gethostname().encode("utf-8", "replace")).hexdigest()[:8]
+    """This host's id in temporary names: 8 hex digits of a CRC-32 of its name, with no
+    hashlib or socket to import at every start. (Older versions took a SHA-1: such a leftover
+    on this host counts as another host's, and goes after FOREIGN_AGE.)"""
+    name = os.uname().nodename if hasattr(os, "uname") else os.environ.get("COMPUTERNAME", "")
+    return f"{zlib.crc32(name.encode('utf-8', 'replace')):08x}"
 
 
 def temp_path(target: str, directory: str) -> str:
@@ -57,7 +59,7 @@ def temp_path(target: str, directory: str) -> str:
         _cleaned.add(directory)
         clean_stale(directory)
     stem, ext = os.path.splitext(os.path.basename(target))
-    name = f".{stem}.envconv-{_host()}-{os.getpid()}-{secrets.token_hex(4)}.tmp{ext}"
+    name = f".{stem}.envconv-{_host()}-{os.getpid()}-{os.urandom(4).hex()}.tmp{ext}"
     path = os.path.join(directory, name)
     with _lock:
         _live.add(path)
