@@ -18,7 +18,7 @@ Run by hand and quote the figures; nothing here is a test.
                                             # the same, interleaved with another venv's envconv
     python benchmarks/bench.py preview      # contact sheet and viewer page of a 16K lat-long, in process
     python benchmarks/bench.py memory       # peak RSS over (input + output arrays), per case,
-                                            # beside envconv.memory's estimate (docs/memory.md)
+                                            # beside envconv.engine.memory's estimate (docs/memory.md)
 
 The envconv measured is the one the running interpreter imports (run this with a venv's python
 in which envconv is installed); the first line printed names it. Kernel throughput counts output
@@ -201,10 +201,10 @@ def bench_mips(repeats: int = 7) -> None:
 
     Equivalent command: envconv convert latlong-2048.exr cross.exr --to cube-vcross --size 512 --mips
     """
-    from envconv.resample import auto_samples
+    from envconv.resample.convert import auto_samples
 
     src = _latlong(1024)
-    # A chain uses one S for every pixel (see envconv.resample); level 0 alone is timed with the
+    # A chain uses one S for every pixel (see envconv.resample.convert); level 0 alone is timed with the
     # same S, so that the ratio is the cost of the chain, not of a different sampling rule.
     s = auto_samples(src, "cube-vcross", 512)
     for mips in (None, True):
@@ -262,7 +262,7 @@ def bench_ibl(runs: int = 5, baseline: str | None = None) -> None:
         cpu_ratio = [b[1] / t[1] for t, b in zip(spent["this"], spent["baseline"], strict=True)]
         print(f"ibl baseline/this, run by run: wall median {statistics.median(ratio):.2f}x, "
               f"CPU median {statistics.median(cpu_ratio):.2f}x")  # fmt: skip
-    from envconv import ibl
+    from envconv.resample.convert import ibl
 
     source = _latlong(1024)
     spent = []
@@ -288,8 +288,8 @@ def bench_preview(repeats: int = 3) -> None:
 
     Equivalent commands: envconv preview latlong-16k.exr -o sheet.png; envconv view latlong-16k.exr
     (reading the file comes on top)."""
-    from envconv.preview import contact_sheet
-    from envconv.viewer import build_page
+    from envconv.views.preview import contact_sheet
+    from envconv.views.viewer import build_page
 
     src = _latlong(8192)
     for name, make in (("contact sheet", contact_sheet), ("viewer page", build_page)):
@@ -373,10 +373,10 @@ def bench_memory() -> None:
 
 
 def _estimate(source: str, args: list[str]) -> int:
-    """envconv.memory's estimate for ``convert SOURCE --to L --size N [--mips|--alpha]``,
+    """envconv.engine.memory's estimate for ``convert SOURCE --to L --size N [--mips|--alpha]``,
     worked out in a child process (reading the source here would swell later children)."""
     options = {"mips": "--mips" in args, "alpha": "--alpha" in args}
-    code = ("import sys, envconv; print(envconv.resample.memory_needed(envconv.read(sys.argv[1]),"
+    code = ("import sys, envconv; print(envconv.resample.convert.memory_needed(envconv.read(sys.argv[1]),"
             f" {args[1]!r}, size={int(args[3])}, **{options!r}))")  # fmt: skip
     done = subprocess.run([sys.executable, "-c", code, source], capture_output=True, text=True,
                           check=True)  # fmt: skip

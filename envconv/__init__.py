@@ -12,6 +12,7 @@ load on first use, so that a command imports only what it uses.
 from __future__ import annotations
 
 import importlib
+import sys
 from typing import TYPE_CHECKING
 
 from .errors import ColorError, EnvconvError, ImageIOError, LayoutError, UsageError
@@ -31,13 +32,57 @@ __all__ = [
     "__version__",
 ]
 
+#: Modules that moved into subpackages (issue 28), by their old names: ``import
+#: envconv.pipeline`` still gives :mod:`envconv.engine.pipeline`, the same module object.
+#: ``envconv.resample`` and ``envconv.color`` became packages that look names up in
+#: :mod:`envconv.resample.convert` and :mod:`envconv.color.ocio`.
+MOVED = {
+    "steps": "engine.steps", "_walk": "engine.walk", "pipeline": "engine.pipeline",
+    "graph": "engine.graph", "batch": "engine.batch", "workers": "engine.workers",
+    "api": "engine.api", "outputs": "engine.outputs", "memory": "engine.memory",
+    "interrupt": "engine.interrupt", "sourcemap": "resample.holes",
+    "sampling": "resample.options", "mips": "resample.mips", "ibl": "resample.ibl",
+    "sh": "resample.harmonics", "kernels": "resample.kernels", "geometry": "layouts.geometry",
+    "rotation": "layouts.rotation", "conventions": "layouts.conventions",
+    "facesets": "layouts.facesets", "detect": "layouts.detect", "prepare": "color.prepare",
+    "quantize": "color.quantize", "preview": "views.preview", "viewer": "views.viewer",
+    "font": "views.font", "pattern": "views.pattern", "info": "views.info",
+}  # fmt: skip
+
+
+class _MovedModules:
+    """Finder and loader of the old module names in :data:`MOVED`: the import gives the moved
+    module itself (its ``__spec__`` kept), registered under both names."""
+
+    @staticmethod
+    def find_spec(fullname, path=None, target=None):
+        package, _, name = fullname.rpartition(".")
+        if package != __name__ or name not in MOVED:
+            return None
+        from importlib.machinery import ModuleSpec
+
+        return ModuleSpec(fullname, _MovedModules)
+
+    @staticmethod
+    def create_module(spec):
+        module = importlib.import_module(f"{__name__}.{MOVED[spec.name.rpartition('.')[2]]}")
+        spec.loader_state = module.__spec__  # the import system overwrites __spec__ next
+        return module
+
+    @staticmethod
+    def exec_module(module):
+        module.__spec__ = module.__spec__.loader_state
+
+
+sys.meta_path.append(_MovedModules)
+
 #: Public names loaded on first use, and the module each comes from.
-_LAZY = {"EnvMap": ".envmap", "read": ".io", "write": ".io", "convert": ".resample"}
+_LAZY = {"EnvMap": ".envmap", "read": ".io", "write": ".io", "convert": ".resample.convert"}
 
 if TYPE_CHECKING:  # pragma: no cover
     from .envmap import EnvMap
     from .io import read, write
-    from .resample import convert
+    from .resample.convert import convert
 
 
 def __getattr__(name: str):

@@ -37,12 +37,12 @@ class EnvMap:
         The mip chain, level 0 first: ``levels[k]`` is (H_k, W_k, C) float32 with
         ``H_k = max(H >> k, 1)``, ``W_k = max(W >> k, 1)`` (per file for multi-file layouts),
         same channels and the same uv ↔ direction mapping as ``pixels``; ``levels[0]`` is
-        ``pixels``. None when the map has no mip chain (see :mod:`envconv.mips`).
+        ``pixels``. None when the map has no mip chain (see :mod:`envconv.resample.mips`).
     valid : numpy.ndarray, optional
         (H, W) float32: 1 where the file held the pixel, 0 in a hole (a display-window pixel
         outside the data window; its channels are 0, alpha included). None when every pixel
         was held. Only maps read from files have one; resampling turns holes into alpha
-        (see :mod:`envconv.sourcemap`).
+        (see :mod:`envconv.resample.holes`).
     parts : tuple of (str, tuple of str)
         For a map read from several parts of a multi-part OpenEXR file: each part's name and
         its own channel names, in the order their channels sit in ``channels``. Written back

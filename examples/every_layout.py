@@ -22,8 +22,8 @@ import time
 import numpy as np
 
 import envconv
-from envconv.geometry import pixel_solid_angles
 from envconv.layouts import LAYOUTS
+from envconv.layouts.geometry import pixel_solid_angles
 
 
 def mean_radiance(envmap: envconv.EnvMap) -> np.ndarray:

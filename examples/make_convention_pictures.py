@@ -2,9 +2,9 @@
 
 Run from anywhere:  python examples/make_convention_pictures.py [OUTDIR]
 
-Every picture is the labelled test pattern (envconv.pattern) drawn in one layout, either in
+Every picture is the labelled test pattern (envconv.views.pattern) drawn in one layout, either in
 envconv's own convention or in another tool's (``--out-convention``), so the docs never drift
-from the code. Each skybox face set (envconv.facesets) is drawn as its six files, side by side
+from the code. Each skybox face set (envconv.layouts.facesets) is drawn as its six files, side by side
 in the program's own file order (``pattern-faceset-NAME.png``).
 """
 
@@ -66,7 +66,7 @@ def main(outdir: str | None = None) -> None:
         if convention:
             args += ["--out-convention", convention]
         subprocess.run(args, check=True)
-    from envconv.facesets import FACE_SETS
+    from envconv.layouts.facesets import FACE_SETS
 
     for name in FACE_SETS:
         face_set_strip(name, out / f"pattern-faceset-{name}.png")
@@ -77,7 +77,7 @@ def face_set_strip(name: str, target: Path) -> None:
     import numpy as np
     import OpenImageIO as oiio
 
-    from envconv.facesets import get_face_set
+    from envconv.layouts.facesets import get_face_set
 
     n = FACE_SET_SIZE
     with tempfile.TemporaryDirectory() as tmp:

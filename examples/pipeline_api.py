@@ -9,8 +9,8 @@ from pathlib import Path
 import numpy as np
 
 import envconv
-from envconv.batch import expand_inputs, make_jobs, run_batch
-from envconv.pipeline import Exposure, Pipeline, Read, Resample, Rotate, Write
+from envconv.engine.batch import expand_inputs, make_jobs, run_batch
+from envconv.engine.pipeline import Exposure, Pipeline, Read, Resample, Rotate, Write
 
 here = Path(__file__).resolve().parent
 out = Path(sys.argv[1] if len(sys.argv) > 1 else "build/python")

@@ -1,4 +1,4 @@
-"""Brute-force references for the GGX prefilter (envconv.ibl), independent of envconv.
+"""Brute-force references for the GGX prefilter (envconv.resample.ibl), independent of envconv.
 
 ``ggx_reference`` integrates L(l) D(h) (n·l)⁺ over the sphere for each direction n, with a
 deterministic quadrature in the half-vector h distributed as GGX (θ_h from the GGX CDF at

@@ -15,7 +15,7 @@ from conftest import run_cli
 
 import envconv
 from envconv import io
-from envconv.batch import expand_inputs, worker_threads
+from envconv.engine.batch import expand_inputs, worker_threads
 
 N_GOOD = 18
 
@@ -197,9 +197,9 @@ def test_progress_bar_on_a_terminal(capsys):
 
 
 def test_make_jobs_applies_the_output_policy_across_jobs(tmp_path):
-    from envconv.batch import make_jobs
+    from envconv.engine.batch import make_jobs
+    from envconv.engine.pipeline import Pipeline, Resample, Write
     from envconv.errors import UsageError
-    from envconv.pipeline import Pipeline, Resample, Write
 
     a, b = tmp_path / "a.exr", tmp_path / "b.exr"
     for path in (a, b):

@@ -13,8 +13,8 @@ import pytest
 from conftest import file_state, rel_rms, run_cli, stderr_lines, write_plain
 
 import envconv
-from envconv.geometry import pixel_solid_angles
 from envconv.io import read_image
+from envconv.layouts.geometry import pixel_solid_angles
 
 ENVCONV = os.path.join(os.path.dirname(sys.executable), "envconv")
 

@@ -1,4 +1,4 @@
-"""Tests for envconv.color against analytic formulas, published matrices and hand counts."""
+"""Tests for envconv.color.ocio against analytic formulas, published matrices and hand counts."""
 
 
 import numpy as np
@@ -6,7 +6,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from envconv import color, quantize
+from envconv.color import ocio as color
+from envconv.color import quantize
 from envconv.errors import ColorError, UsageError
 
 LIN = "Linear Rec.709 (sRGB)"
@@ -78,7 +79,7 @@ def test_import_is_cheap():
     import subprocess
     import sys
 
-    code = "import sys, envconv.color; print('PyOpenColorIO' in sys.modules)"
+    code = "import sys, envconv.color.ocio; print('PyOpenColorIO' in sys.modules)"
     # envconv/__init__ may import io (OIIO) but nothing may pull in OCIO eagerly.
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"

@@ -1,4 +1,4 @@
-"""Colour flow through reading, resampling and writing (envconv.color, envconv.prepare, envconv.io.encode, the CLI).
+"""Colour flow through reading, resampling and writing (envconv.color.ocio, envconv.color.prepare, envconv.io.encode, the CLI).
 
 Truth comes from outside the code under test: integer codes chosen by the test, OCIO
 processors built here with PyOpenColorIO, the sRGB formulas of IEC 61966-2-1, hand counts
@@ -13,7 +13,9 @@ import PyOpenColorIO as ocio
 import pytest
 from conftest import run_cli, stderr_lines, write_plain
 
-from envconv import color, io, quantize
+from envconv import io
+from envconv.color import ocio as color
+from envconv.color import quantize
 from envconv.envmap import EnvMap
 from envconv.io import encode, formats, reader
 

@@ -2,7 +2,7 @@
 
 Every synthesiser below transliterates a formula of ../shared/reference/conventions-in-the-wild.md
 (tool pixel → direction in the tool's frame, then the tool's frame → envconv's by the standard
-map of envconv.conventions). A file filled that way with an analytic environment, read with the
+map of envconv.layouts.conventions). A file filled that way with an analytic environment, read with the
 tool's preset, must equal the same environment sampled through envconv's own geometry.
 """
 
@@ -15,22 +15,22 @@ from click.testing import CliRunner
 
 import envconv
 from envconv.cli.main import cli
-from envconv.conventions import (
+from envconv.errors import LayoutError, UsageError
+from envconv.layouts.conventions import (
     PRESETS,
     apply_remap,
     environment_axes,
     parse_axes,
     resolve_convention,
 )
-from envconv.errors import LayoutError, UsageError
-from envconv.geometry import pixel_directions
-from envconv.rotation import rotation_matrix
+from envconv.layouts.geometry import pixel_directions
+from envconv.layouts.rotation import rotation_matrix
 
 NL = 16  # lat-long height
 NC = 8  # cube face edge
 ND = 64  # disk diameter
 
-# Tool frame → envconv frame (module docstring of envconv.conventions).
+# Tool frame → envconv frame (module docstring of envconv.layouts.conventions).
 RH = lambda d: d  # noqa: E731
 LH = lambda d: d * [-1.0, 1.0, 1.0]  # noqa: E731  Unity, cmft, D3D
 BLENDER = lambda d: np.stack([d[..., 0], d[..., 2], -d[..., 1]], -1)  # noqa: E731

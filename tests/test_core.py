@@ -1,4 +1,4 @@
-"""The native core through its bindings (envconv.kernels, envconv._core).
+"""The native core through its bindings (envconv.resample.kernels, envconv._core).
 
 Truth: the independent numpy reading of CONVENTIONS.md in tests/naive.py for every family's
 maps and densities, and the core itself run on one thread for the thread-count invariance.
@@ -11,9 +11,10 @@ import numpy as np
 import pytest
 
 import envconv
-from envconv import _core, kernels
-from envconv.geometry import kernel_geometry
+from envconv import _core
 from envconv.layouts import get_layout
+from envconv.layouts.geometry import kernel_geometry
+from envconv.resample import kernels
 
 # One layout of each geometry family, with the family's name in tests/naive.py.
 FAMILIES = {

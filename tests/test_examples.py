@@ -119,7 +119,7 @@ def test_every_layout_example(workdir):
 
 
 def _sphere_mean(envmap):
-    from envconv.geometry import pixel_solid_angles
+    from envconv.layouts.geometry import pixel_solid_angles
 
     omega = pixel_solid_angles(envmap.layout, envmap.size, envmap.guard)
     return (envmap.pixels[..., :3] * omega[..., None]).sum(axis=(0, 1)) / omega.sum()

@@ -1,4 +1,4 @@
-"""Skybox face sets (envconv.facesets, --in-convention/--out-convention on {face} paths).
+"""Skybox face sets (envconv.layouts.facesets, --in-convention/--out-convention on {face} paths).
 
 The truth here is not envconv's: for every face set a small function below follows the cited
 program's own formula for where a file's pixel shows up in its world (Quake's ``st_to_vec`` and
@@ -190,9 +190,9 @@ def test_writing_gives_the_program_files(tmp_path, name):
         np.testing.assert_allclose(got[key], image, rtol=1e-6, atol=1e-6, err_msg=key)
 
 
-@pytest.mark.parametrize("name", envconv.facesets.face_set_names())
+@pytest.mark.parametrize("name", envconv.layouts.facesets.face_set_names())
 def test_labelled_pattern_round_trip(tmp_path, name):
-    from envconv.pattern import render_pattern
+    from envconv.views.pattern import render_pattern
 
     pattern = render_pattern("cube-faces", 24, samples=1)
     template = str(tmp_path / "p_{face}.exr")
@@ -317,13 +317,13 @@ def test_unity_front_and_back_are_not_a_paraboloid(tmp_path):
 
 def test_face_set_errors():
     with pytest.raises(UsageError, match="unknown face set 'quack'; did you mean quake"):
-        envconv.facesets.get_face_set("quack")
+        envconv.layouts.facesets.get_face_set("quack")
     env = envconv.EnvMap(np.zeros((4, 8, 3), np.float32), "latlong")
     with pytest.raises(LayoutError, match="applies to cube-faces, not latlong"):
         envconv.write(env, "sky_{face}.exr", faces="quake")
     with pytest.raises(LayoutError, match="needs {face} in the path"):
         envconv.read("sky.exr", faces="quake")
-    assert envconv.facesets.get_face_set("Source").name == "quake"
+    assert envconv.layouts.facesets.get_face_set("Source").name == "quake"
 
 
 def test_cli_reads_a_game_skybox_by_its_names(tmp_path):
@@ -375,13 +375,13 @@ def test_cli_ambiguity_is_one_line(tmp_path):
 def test_cli_layouts_lists_face_sets():
     result = run_cli(["layouts"])
     assert result.exit_code == 0
-    for name in envconv.facesets.face_set_names():
+    for name in envconv.layouts.facesets.face_set_names():
         assert any(line.startswith(name + " ") for line in result.stdout.splitlines()), name
     assert "rt bk lf ft up dn" in result.stdout
 
 
 def test_pipeline_steps_take_face_sets(tmp_path):
-    from envconv.pipeline import Pipeline, Read, Resample, Write
+    from envconv.engine.pipeline import Pipeline, Read, Resample, Write
 
     template = write_files(tmp_path, render_files(quake_faces(), N))
     out = str(tmp_path / "ue_{face}.exr")

@@ -1,4 +1,4 @@
-"""envconv.geometry against an independent reading of CONVENTIONS.md and numeric Jacobians."""
+"""envconv.layouts.geometry against an independent reading of CONVENTIONS.md and numeric Jacobians."""
 
 from __future__ import annotations
 
@@ -8,13 +8,13 @@ import naive
 import numpy as np
 import pytest
 
-from envconv.geometry import (
+from envconv.layouts import LAYOUTS, get_layout
+from envconv.layouts.geometry import (
     horizon_pitch,
     pixel_directions,
     pixel_solid_angles,
     uv_to_dir,
 )
-from envconv.layouts import LAYOUTS, get_layout
 
 NAMES = list(LAYOUTS)
 RECT = [name for name in NAMES if name not in ("sphere", "angular", "paraboloid", "paraboloid-split")]

@@ -1,4 +1,4 @@
-"""Graph files (envconv.graph) and ``envconv run``: variables, validation, --dry-run.
+"""Graph files (envconv.engine.graph) and ``envconv run``: variables, validation, --dry-run.
 
 Truth: outputs equal ``envconv.convert`` of the same input; plans are checked against the
 layouts' size rules of CONVENTIONS.md (W × H from N and G) and against the files a real run writes.
@@ -15,8 +15,8 @@ from conftest import run_cli
 
 import envconv
 from envconv import io
+from envconv.engine.graph import load_graph
 from envconv.errors import UsageError
-from envconv.graph import load_graph
 
 
 @pytest.fixture(scope="module")
@@ -97,7 +97,7 @@ def test_dry_run_prints_the_plan_without_pixels(hdri, tmp_path, monkeypatch):
         assert str(hdri / f"{stem}.exr") in text
         assert "cube-vcross  N=8  G=0  24x32  1 level" in text
         fake = envconv.EnvMap(np.zeros((n, 2 * n, 3), np.float32), "latlong")
-        m = envconv.resample.default_size(fake, "paraboloid")
+        m = envconv.resample.convert.default_size(fake, "paraboloid")
         assert f"paraboloid  N={m}  G=1  {2 * (m + 2)}x{m + 2}  1 level" in text
         assert str(tmp_path / "build" / f"{stem}_paraboloid_{m}.exr") in text
 
@@ -161,7 +161,7 @@ def test_bad_files_and_inputs(tmp_path):
 
 
 def test_every_key_of_every_step_has_a_check():
-    from envconv.graph import CHECKS, STEP_KEYS
+    from envconv.engine.graph import CHECKS, STEP_KEYS
 
     missing = {(kind, key) for kind, keys in STEP_KEYS.items() for key in keys if key not in CHECKS}
     assert not missing, missing
@@ -192,7 +192,7 @@ def test_wrong_types_and_choices_name_the_step_and_the_key(tmp_path, step, entry
 
 def test_samples_guard_and_mips_follow_one_rule_in_library_cli_and_graph(tmp_path):
     """sampling.check_* is the one home: each bad value is refused by all three front doors."""
-    from envconv.sampling import check_guard, check_mips, check_samples
+    from envconv.resample.options import check_guard, check_mips, check_samples
 
     assert check_mips("ggx:3") == (3, True) and check_mips("box") == (True, False)
     assert check_mips(0) == (True, False) and check_mips(None) == (None, False)

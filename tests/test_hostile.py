@@ -185,7 +185,7 @@ def test_convert_and_the_chain_write_the_same_bytes(tmp_path):
     assert stamp.sub(b"", bytes_a) == stamp.sub(b"", bytes_b)
 
 
-# --- memory: the memory guard (envconv.memory, docs/memory.md) --------------------------------
+# --- memory: the memory guard (envconv.engine.memory, docs/memory.md) --------------------------------
 
 
 def _small_latlong(tmp_path):

@@ -1,4 +1,4 @@
-"""GGX-prefiltered chains and irradiance maps (envconv.ibl, src/core/ibl.*) against truth.
+"""GGX-prefiltered chains and irradiance maps (envconv.resample.ibl, src/core/ibl.*) against truth.
 
 The truth is a brute-force integral of the analytic environment (tests/ggx_reference.py),
 computed here for a fixed sample of texels of every level.
@@ -18,7 +18,7 @@ from node_readers import read_container
 
 import envconv
 from envconv.errors import UsageError
-from envconv.ibl import roughness_levels
+from envconv.resample.ibl import roughness_levels
 
 N = 32  # output faces: levels 32, 16, 8, 4, 2, 1
 SUN = analytic.SUN / np.linalg.norm(analytic.SUN)
@@ -160,7 +160,7 @@ def test_chain_of_a_rotated_map_equals_the_rotated_chain():
 
 
 def _yaw(degrees):
-    from envconv.rotation import rotation_matrix
+    from envconv.layouts.rotation import rotation_matrix
 
     return rotation_matrix(degrees, 0, 0)
 
@@ -173,7 +173,7 @@ def test_irradiance_matches_the_sh_irradiance_of_a_low_order_environment():
         x, y, z = d[..., 0], d[..., 1], d[..., 2]
         return np.stack([1 + 0.5 * y + 0.3 * x * z, 1 + 0.2 * (3 * z * z - 1), 2 - 0.4 * x], -1)
 
-    from envconv.sh import evaluate, irradiance_coefficients, project
+    from envconv.resample.harmonics import evaluate, irradiance_coefficients, project
 
     source = _source(low)
     irr = envconv.convert(source, "cube-faces", size=8, irradiance=True)
@@ -230,10 +230,10 @@ def test_irradiance_of_a_one_pixel_sun_keeps_its_energy_and_direction(row, col, 
     the sun's energy is kept exactly and it shines from its own direction, so every texel is
     the cosine lobe of that pixel (integrated over the pixel and the texel)."""
     source, suns, omega = _pixel_sun("latlong", 512, row, col)
-    assert envconv.ibl._bin_plan(source, 64) == (1, math.pi / 512)
+    assert envconv.resample.ibl._bin_plan(source, 64) == (1, math.pi / 512)
     irr = envconv.convert(source, "cube-faces", size=16, irradiance=True, rotate=rotate)
     if rotate is not None:
-        from envconv.rotation import parse_rotation, rotation_matrix
+        from envconv.layouts.rotation import parse_rotation, rotation_matrix
 
         suns = suns @ rotation_matrix(*parse_rotation(rotate)).T  # source d lands at R d
     energy, worst, rms = _sun_irradiance_errors(irr, suns, omega)
@@ -251,7 +251,7 @@ def test_irradiance_of_a_one_pixel_sun_in_any_layout_keeps_its_energy(layout, n,
     """Other layouts are binned through their own geometry (ibl._bin_plan): the energy of one
     bright pixel is kept and shines from that pixel's own direction."""
     source, suns, omega = _pixel_sun(layout, n, row, col)
-    assert envconv.ibl._bin_plan(source, 64) is not None
+    assert envconv.resample.ibl._bin_plan(source, 64) is not None
     irr = envconv.convert(source, "cube-faces", size=16, irradiance=True)
     energy, worst, _ = _sun_irradiance_errors(irr, suns, omega)
     assert abs(energy - 1) < 0.005, energy
@@ -259,8 +259,8 @@ def test_irradiance_of_a_one_pixel_sun_in_any_layout_keeps_its_energy(layout, n,
 
 
 def test_binned_pyramid_is_the_same_on_one_and_many_threads():
-    from envconv import kernels
-    from envconv.geometry import kernel_geometry
+    from envconv.layouts.geometry import kernel_geometry
+    from envconv.resample import kernels
 
     source, _, _ = _pixel_sun("latlong", 512, 100, 200)
     source.pixels[...] += np.random.default_rng(3).random(source.pixels.shape, np.float32)

@@ -11,10 +11,10 @@ import pytest
 from conftest import file_state, write_plain
 
 import envconv
-from envconv.api import convert_file
-from envconv.detect import detect_layout
+from envconv.engine.api import convert_file
 from envconv.errors import ImageIOError, LayoutError
 from envconv.io import read_image
+from envconv.layouts.detect import detect_layout
 
 # ---------------------------------------------------------------------------------------------
 # Round trips per format

@@ -11,8 +11,8 @@ from hypothesis import assume, given
 from hypothesis import strategies as st
 
 from envconv.errors import LayoutError
-from envconv.geometry import dir_to_uv, pixel_directions, uv_to_dir
 from envconv.layouts import LAYOUTS, get_layout
+from envconv.layouts.geometry import dir_to_uv, pixel_directions, uv_to_dir
 
 ISSUE_LAYOUTS = [
     "latlong", "cube-vcross", "cube-hcross", "cube-hstrip", "cube-vstrip", "cube-exr",

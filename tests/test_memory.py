@@ -1,4 +1,4 @@
-"""The memory model and peak memory of real conversions (envconv.memory, docs/memory.md).
+"""The memory model and peak memory of real conversions (envconv.engine.memory, docs/memory.md).
 
 Peak memory is measured in a fresh process as its ``VmHWM`` (the high-water mark of its own
 address space, which exec resets; ``ru_maxrss`` would carry the RSS of the forking pytest
@@ -19,17 +19,17 @@ import pytest
 from conftest import write_plain
 
 import envconv
-from envconv import memory
+from envconv.color.quantize import quantize
+from envconv.engine import memory
 from envconv.errors import UsageError
 from envconv.io import encode
-from envconv.quantize import quantize
 
 linux = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc/self/status")
 
 #: Runs ``envconv convert`` in process after a warm-up; prints the warm and final high-water marks.
 PROBE = textwrap.dedent("""
     import json, sys
-    from envconv.api import convert_file
+    from envconv.engine.api import convert_file
 
     def hwm():
         with open("/proc/self/status") as handle:
@@ -94,7 +94,7 @@ def test_estimate_bounds_the_measured_peak(sources, out_name, resample):
     warm, peak = _measure(folder, tiny, mid, out_name, resample)
     source = envconv.read(mid)
     options = {k: v for k, v in resample.items() if k != "to"}
-    estimate = envconv.resample.memory_needed(source, resample["to"], **options)
+    estimate = envconv.resample.convert.memory_needed(source, resample["to"], **options)
     measured = peak - warm
     assert measured > 0
     assert measured <= estimate <= 2 * measured, (measured, estimate)
@@ -128,7 +128,7 @@ def test_blockwise_encoding_is_the_whole_image_encoding(monkeypatch):
                              "lin_rec709_scene", None)  # fmt: skip
     whole, report = quantize(pixels, "uint8", dither=True)
     monkeypatch.setattr(encode, "ENCODE_BLOCK_BYTES", 29 * 4 * 4 * 3)  # 3 rows a block
-    codes, merged, _ = encode._encode_level(pixels, plan, envconv.color.config_for(None), True)
+    codes, merged, _ = encode._encode_level(pixels, plan, envconv.color.ocio.config_for(None), True)
     np.testing.assert_array_equal(codes, whole)
     assert merged == report
 
@@ -158,14 +158,14 @@ def test_convert_refuses_what_the_limit_cannot_hold(monkeypatch):
 def test_estimate_grows_with_every_array():
     """Each array of the model adds to the estimate: alpha, a chain, holes."""
     sky = envconv.EnvMap(np.ones((64, 128, 3), np.float32), "latlong")
-    base = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2)
+    base = envconv.resample.convert.memory_needed(sky, "cube-vcross", size=256, samples=2)
     plane = 4 * 256 * 3 * 256 * 4  # one float32 plane of the 3N × 4N cross
-    alpha = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2, alpha=True)
+    alpha = envconv.resample.convert.memory_needed(sky, "cube-vcross", size=256, samples=2, alpha=True)
     assert alpha - base >= plane  # the alpha channel in the output
-    chain = envconv.resample.memory_needed(sky, "cube-vcross", size=256, samples=2, mips=True)
+    chain = envconv.resample.convert.memory_needed(sky, "cube-vcross", size=256, samples=2, mips=True)
     assert chain - base > 0.9 * plane  # a third more output and the float32 weights of each level
     holes = envconv.EnvMap(sky.pixels, "latlong", valid=np.ones((64, 128), np.float32))
-    assert envconv.resample.memory_needed(holes, "cube-vcross", size=256, samples=2) > base
+    assert envconv.resample.convert.memory_needed(holes, "cube-vcross", size=256, samples=2) > base
 
 
 def test_system_memory_is_used_at_80_percent(monkeypatch):

@@ -6,7 +6,7 @@ from __future__ import annotations
 import pytest
 from conftest import run_cli, stderr_lines
 
-import envconv.info
+import envconv.views.info
 from envconv.cli.messages import did_you_mean, one_line, step_typo
 from envconv.errors import ImageIOError, LayoutError, UsageError
 from envconv.layouts import ALIASES, FAMILIES, LAYOUTS, get_layout, resolve_layout_name
@@ -25,7 +25,7 @@ def test_each_kind_of_error_has_its_status_and_one_line(monkeypatch, exc, status
         raise exc
 
     monkeypatch.delenv("ENVCONV_DEBUG", raising=False)
-    monkeypatch.setattr(envconv.info, "describe", fail)
+    monkeypatch.setattr(envconv.views.info, "describe", fail)
     result = run_cli(["info", "any.exr"])
     assert result.exit_code == status
     assert stderr_lines(result) == [line] and result.stdout == ""

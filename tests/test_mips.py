@@ -11,8 +11,8 @@ from naive import pixel_solid_angles as naive_solid_angles
 
 import envconv
 from envconv import io
-from envconv.mips import convert_level, mip_sizes
-from envconv.resample import auto_samples
+from envconv.resample.convert import auto_samples
+from envconv.resample.mips import convert_level, mip_sizes
 
 
 def _latlong_of(fn, h):

@@ -20,10 +20,10 @@ import pytest
 from conftest import rel_rms, run_cli, stderr_lines, write_plain
 
 import envconv
-from envconv.conventions import resolve_convention
-from envconv.detect import detect_layout
 from envconv.errors import LayoutError
-from envconv.geometry import dir_to_uv, pixel_directions, pixel_solid_angles, uv_to_dir
+from envconv.layouts.conventions import resolve_convention
+from envconv.layouts.detect import detect_layout
+from envconv.layouts.geometry import dir_to_uv, pixel_directions, pixel_solid_angles, uv_to_dir
 
 SQUARES = ["octahedral", "equal-area"]
 R2 = math.sqrt(0.5)

@@ -8,8 +8,8 @@ from click.testing import CliRunner
 
 import envconv
 from envconv.cli.main import cli
-from envconv.geometry import pixel_directions
-from envconv.pattern import GLYPH_UNIT, pattern, render_pattern
+from envconv.layouts.geometry import pixel_directions
+from envconv.views.pattern import GLYPH_UNIT, pattern, render_pattern
 
 # How the glyphs must read (written out here, independently of the module's font).
 READS = {

@@ -1,4 +1,4 @@
-"""envconv.pipeline: steps, the fan-out rule, rotations, variables and plans.
+"""envconv.engine.pipeline: steps, the fan-out rule, rotations, variables and plans.
 
 Truth: ``envconv.convert`` run directly on the source (the pipeline must equal it bit for bit),
 analytic environments (tests/analytic.py, tests/naive.py), and rotation matrices.
@@ -11,8 +11,7 @@ import pytest
 
 import envconv
 from envconv import io
-from envconv.errors import UsageError
-from envconv.pipeline import (
+from envconv.engine.pipeline import (
     Exposure,
     Pipeline,
     Read,
@@ -24,7 +23,8 @@ from envconv.pipeline import (
     expand_path,
     path_variables,
 )
-from envconv.rotation import rotation_matrix
+from envconv.errors import UsageError
+from envconv.layouts.rotation import rotation_matrix
 
 
 @pytest.fixture(scope="module")
@@ -181,7 +181,7 @@ def test_plan_reads_headers_only(sky, tmp_path, monkeypatch):
 
     monkeypatch.setattr(io.reader, "read_file", no_pixels)
     faces, para = Pipeline(steps).plan()
-    expected_n = envconv.resample.default_size(
+    expected_n = envconv.resample.convert.default_size(
         envconv.EnvMap(np.zeros((32, 64, 3), np.float32), "latlong"), "cube-faces"
     )
     assert (faces.layout, faces.size, faces.width, faces.height) == (
@@ -241,7 +241,7 @@ def test_write_keeps_the_colour_space_of_a_colorspace_step(sky, tmp_path):
 
     plain, cg = tmp_path / "plain.exr", tmp_path / "cg.exr"
     Pipeline([Read(sky), Resample("latlong", size=16), Write(plain, bit_depth="float"),
-              Resample("latlong", size=16), envconv.pipeline.Colorspace("ACEScg"),
+              Resample("latlong", size=16), envconv.engine.pipeline.Colorspace("ACEScg"),
               Write(cg, bit_depth="float")]).run()  # fmt: skip
     config = ocio.Config.CreateFromFile("ocio://default")
     linear, tag = _oiio_pixels(plain)
@@ -258,7 +258,7 @@ def test_write_names_its_own_colour_space_over_the_step(sky, tmp_path):
     """``--output-colorspace`` on the write wins: back to Rec.709, the plain output again."""
     plain, back = tmp_path / "plain.exr", tmp_path / "back.exr"
     Pipeline([Read(sky), Resample("latlong", size=16), Write(plain, bit_depth="float"),
-              envconv.pipeline.Colorspace("ACEScg"),
+              envconv.engine.pipeline.Colorspace("ACEScg"),
               Write(back, bit_depth="float", output_colorspace="lin_rec709")]).run()  # fmt: skip
     np.testing.assert_allclose(_oiio_pixels(back)[0], _oiio_pixels(plain)[0], rtol=1e-5, atol=1e-6)
 
@@ -329,7 +329,7 @@ def test_two_outputs_on_one_path_and_no_clobber_are_refused_before_any_work(sky,
 def test_convert_file_is_the_pipeline_read_resample_write(tmp_path):
     """api.convert_file and a Pipeline give the same pixels, and the same NaN/Inf warnings
     (on main the pipeline ignored NaN handling that only convert knew)."""
-    from envconv.api import convert_file
+    from envconv.engine.api import convert_file
 
     pixels = np.ones((8, 16, 3), np.float32)
     pixels[3, 5, 1] = np.nan
@@ -347,7 +347,7 @@ def test_convert_file_is_the_pipeline_read_resample_write(tmp_path):
 
 
 def test_user_variables_use_each_other_but_not_in_a_cycle():
-    from envconv.steps import check_variables
+    from envconv.engine.steps import check_variables
 
     assert check_variables({"a": "{dir}/x", "b": "{a}_{stem}"}) == {"a": "{dir}/x", "b": "{dir}/x_{stem}"}
     with pytest.raises(UsageError, match="cycle"):

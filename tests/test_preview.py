@@ -8,11 +8,11 @@ import pytest
 from click.testing import CliRunner
 
 import envconv
-import envconv.geometry
+import envconv.layouts.geometry
 from envconv.cli.main import cli
 from envconv.layouts import LAYOUTS
-from envconv.pattern import LABELS, pattern, render_pattern
-from envconv.preview import (
+from envconv.views.pattern import LABELS, pattern, render_pattern
+from envconv.views.preview import (
     MID_GREY,
     auto_exposure,
     contact_sheet,
@@ -161,7 +161,7 @@ def test_diffuse_ball_of_a_constant_map_is_that_constant():
 
 
 def test_diffuse_ball_is_brighter_towards_a_bright_hemisphere():
-    d = envconv.geometry.pixel_directions("latlong", 64)[0]
+    d = envconv.layouts.geometry.pixel_directions("latlong", 64)[0]
     env = envconv.EnvMap(np.repeat((d[..., 1:2] > 0) * 1.0, 3, axis=2).astype(np.float32), "latlong")
     ball = diffuse_ball(working_map(env), 32)
     top, bottom = ball[4, 16, 0], ball[27, 16, 0]  # normals tilted up / down
@@ -240,8 +240,8 @@ def test_convert_preview_never_overwrites_the_output(tmp_path):
 
 
 def test_stats_count_nans_and_find_the_brightest_direction():
-    from envconv.geometry import dir_to_uv
-    from envconv.preview import map_stats
+    from envconv.layouts.geometry import dir_to_uv
+    from envconv.views.preview import map_stats
 
     px = np.full((256, 512, 3), 0.5, np.float32)
     sun = np.array([0.6, 0.64, -0.48])  # a unit direction
@@ -258,7 +258,7 @@ def test_stats_count_nans_and_find_the_brightest_direction():
 
 
 # Tool axis → the envconv axis it is, restated from each tool's documented frame (not from
-# envconv.conventions): envconv is Y-up right-handed, and a camera looking along +Z with up +Y
+# envconv.layouts.conventions): envconv is Y-up right-handed, and a camera looking along +Z with up +Y
 # has screen right −X (right = forward × up).
 #   Blender: Z up, right-handed; the glTF exporter's swizzle (x, y, z) → (x, z, −y).
 #   Unity: Y up, left-handed, +Z forward, +X right: so +X is envconv's right of +Z, −X.
@@ -297,7 +297,7 @@ def test_views_in_a_tools_axes_show_that_axis(pattern_work, tool):
 
 
 def test_a_frame_given_as_axes_is_that_frame():
-    from envconv.preview import view_axes
+    from envconv.views.preview import view_axes
 
     assert view_axes("x,z,-y") == view_axes("blender") == TOOL_AXES["blender"]
     assert view_axes(None) == {axis: axis for axis in LABELS}
@@ -324,7 +324,7 @@ def test_preview_cli_convention(tmp_path):
 
 
 def test_thumbnail_is_the_box_average_and_range_skips_non_finite():
-    from envconv.preview import _range_and_nans, _thumbnail
+    from envconv.views.preview import _range_and_nans, _thumbnail
 
     rng = np.random.default_rng(5)
     px = rng.uniform(-1, 5, (530, 1060, 3)).astype(np.float32)  # not a multiple of the step
@@ -345,7 +345,7 @@ def test_a_large_lat_long_is_box_averaged_first_and_still_right():
     def sky(d):
         return np.stack([1 + 0.5 * d[..., 0], 1 + 0.3 * d[..., 1] ** 2, 1 - 0.4 * d[..., 2]], -1)
 
-    env = envconv.EnvMap(sky(envconv.geometry.pixel_directions("latlong", 320)[0]).astype(np.float32), "latlong")
+    env = envconv.EnvMap(sky(envconv.layouts.geometry.pixel_directions("latlong", 320)[0]).astype(np.float32), "latlong")
     work = working_map(env, height=64)
     assert work.pixels.shape == (64, 128, 3)
     # truth: the solid-angle mean of the sky over each working pixel, 8 × 8 points per pixel

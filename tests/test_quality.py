@@ -16,8 +16,8 @@ import numpy as np
 import pytest
 
 import envconv
-from envconv.geometry import pixel_solid_angles
-from envconv.resample import default_size
+from envconv.layouts.geometry import pixel_solid_angles
+from envconv.resample.convert import default_size
 
 # A pattern above every cube size's Nyquist limit below: cos(K lon) cos(K lat) has a period of
 # 2π/K = 0.0245 rad, about one 64-pixel cube face pixel (≈ 0.026 rad) and 8 texels of the
@@ -192,7 +192,7 @@ def test_single_tap_loses_highlight_energy(starfield):
 @pytest.mark.parametrize("samples", [1, 2])
 def test_tiled_kernel_matches_naive(name, n, samples):
     """At these sizes most pixels take the kernel's interpolated-tile path (see
-    envconv.kernels.tiles), which interpolates source positions and solid-angle weights;
+    envconv.resample.kernels.tiles), which interpolates source positions and solid-angle weights;
     the result must still match the exact per-sample reference, near a mirror ball's rim
     (where the density is singular) as well."""
     source = naive.pixel_average("latlong", 128, analytic.radiance, 2).astype(np.float32)

@@ -1,4 +1,4 @@
-"""Tests for envconv.quantize, envconv.prepare and exposure: quantizing, dither, clip reports, NaN/Inf, negatives.
+"""Tests for envconv.color.quantize, envconv.color.prepare and exposure: quantizing, dither, clip reports, NaN/Inf, negatives.
 
 Truth is hand-computed counts and codes, OIIO's own fixNonFinite, and statistics of the dither.
 """
@@ -8,7 +8,8 @@ import warnings
 import numpy as np
 import pytest
 
-from envconv import color, prepare, quantize
+from envconv.color import ocio as color
+from envconv.color import prepare, quantize
 from envconv.errors import EnvconvError, UsageError
 
 

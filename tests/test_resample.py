@@ -16,12 +16,12 @@ import pytest
 from conftest import rel_rms
 
 import envconv
-from envconv.geometry import dir_to_uv, pixel_directions, pixel_solid_angles
 from envconv.layouts import LAYOUTS
+from envconv.layouts.geometry import dir_to_uv, pixel_directions, pixel_solid_angles
 
 NAMES = list(LAYOUTS)
 N_LATLONG = 64  # the analytic lat-long source is 128 × 64
-# Output sizes near the source's horizon resolution (see envconv.resample.default_size).
+# Output sizes near the source's horizon resolution (see envconv.resample.convert.default_size).
 SIZES = {
     "latlong": 64, "cube-vcross": 34, "cube-hcross": 34, "cube-hstrip": 34, "cube-vstrip": 34,
     "cube-exr": 34, "cube-faces": 34, "sphere": 96, "angular": 96, "paraboloid": 48,
@@ -265,7 +265,7 @@ def test_kernel_matches_naive_nearest(name, small_source):
 
 
 # ---------------------------------------------------------------------------------------------
-# Rotation (envconv.rotation: about +Y by yaw, then +X by pitch, then +Z by roll, right-handed)
+# Rotation (envconv.layouts.rotation: about +Y by yaw, then +X by pitch, then +Z by roll, right-handed)
 
 
 def _rotation_matrix(yaw, pitch, roll):

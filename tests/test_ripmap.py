@@ -1,4 +1,4 @@
-"""The lat-long rip-map that auto sampling reads in polar rows (envconv.kernels.build_rips).
+"""The lat-long rip-map that auto sampling reads in polar rows (envconv.resample.kernels.build_rips).
 
 Truth: numpy box averages of level 0, the seam-aware bilinear read of the core's taps
 (the continued mapping that the known-direction tests pin to CONVENTIONS.md), and
@@ -14,9 +14,9 @@ import numpy as np
 import pytest
 
 import envconv
-from envconv import kernels
-from envconv.geometry import kernel_geometry
-from envconv.kernels import (
+from envconv.layouts.geometry import kernel_geometry
+from envconv.resample import kernels
+from envconv.resample.kernels import (
     FILTER_BILINEAR,
     build_rips,
     filtered_reads,
@@ -166,7 +166,7 @@ def test_only_the_polar_rows_are_filled_and_they_equal_a_full_build():
 
 def _poisoned_rips(monkeypatch, rows=None):
     """Make source_rips fill unfilled rip-map rows with NaN, and optionally fix the row count."""
-    import envconv.resample as resample_module
+    import envconv.resample.convert as resample_module
 
     original = kernels.build_rips
 
@@ -192,7 +192,7 @@ def test_rows_filled_near_the_poles_give_the_pixels_of_a_full_rip_map(
     pixels are those of a rip-map filled in every row, bit for bit, and none is NaN although
     the unfilled rows are. (Each case fills under half the rows, and reads the rip-map: without
     it the pixels differ.)"""
-    import envconv.resample as resample_module
+    import envconv.resample.convert as resample_module
 
     source = envconv.EnvMap(stripes_source, "latlong")
     height, width = stripes_source.shape[:2]

@@ -1,4 +1,4 @@
-"""Order-2 spherical harmonics (envconv.sh, ``envconv sh``) against direct numeric projection
+"""Order-2 spherical harmonics (envconv.resample.harmonics, ``envconv sh``) against direct numeric projection
 and the irradiance of known environments (Ramamoorthi & Hanrahan 2001)."""
 
 from __future__ import annotations
@@ -13,7 +13,13 @@ import pytest
 from conftest import run_cli
 
 import envconv
-from envconv.sh import evaluate, irradiance_coefficients, irradiance_matrix, project, sh_basis
+from envconv.resample.harmonics import (
+    evaluate,
+    irradiance_coefficients,
+    irradiance_matrix,
+    project,
+    sh_basis,
+)
 
 
 def _direct(fn, n_lat=192, n_lon=384):

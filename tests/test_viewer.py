@@ -12,8 +12,8 @@ from test_preview import _ocio_view, camera_dirs
 
 import envconv
 from envconv.cli.main import cli
-from envconv.pattern import LABELS, pattern, render_pattern
-from envconv.viewer import build_page, rgbe_decode, rgbe_encode
+from envconv.views.pattern import LABELS, pattern, render_pattern
+from envconv.views.viewer import build_page, rgbe_decode, rgbe_encode
 
 SIZE = 256  # the page's viewport (Emulation.setDeviceMetricsOverride), square
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
@@ -225,9 +225,9 @@ LEVEL_LIMIT = 0.02
 @pytest.fixture(scope="module")
 def analytic_page(tmp_path_factory):
     """(page, the Python GGX levels read at −Z by roughness) of the analytic sky."""
-    from envconv.viewer import GGX_LEVELS, ggx_page_levels
+    from envconv.views.viewer import GGX_LEVELS, ggx_page_levels
 
-    d = envconv.geometry.pixel_directions("latlong", 256)[0]
+    d = envconv.layouts.geometry.pixel_directions("latlong", 256)[0]
     env = envconv.EnvMap(_analytic(d).astype(np.float32), "latlong")
     levels = zip(GGX_LEVELS, ggx_page_levels(env), strict=True)
     values = {r: _level_at_minus_z(level.pixels) for (r, _), level in levels}

@@ -65,7 +65,7 @@ def test_the_wheel_installs_into_a_fresh_venv_and_converts(wheel, tmp_path):
     back = envconv.read(out)
     assert back.layout.name == "cube-vcross" and back.pixels.shape == (32, 24, 3)
     # The mean radiance of the faces matches the source's solid-angle mean (a smooth map).
-    from envconv.geometry import pixel_solid_angles
+    from envconv.layouts.geometry import pixel_solid_angles
 
     omega = pixel_solid_angles("cube-vcross", 8)
     got = (back.pixels[..., 0] * omega).sum() / omega.sum()

@@ -12,9 +12,9 @@ from typing import Any
 
 import click
 
-from ..batch import BatchInterrupted, expand_inputs, make_jobs, run_batch, write_report
-from ..graph import load_graph
-from ..pipeline import Pipeline, Resample, Write
+from ..engine.batch import BatchInterrupted, expand_inputs, make_jobs, run_batch, write_report
+from ..engine.graph import load_graph
+from ..engine.pipeline import Pipeline, Resample, Write
 from .main import cli
 from .options import no_clobber_option
 from .progress import Progress, summary_line
@@ -125,7 +125,7 @@ def execute(jobs, workers=1, skip_existing=False, update=False, report=None, das
         _print_plan(jobs)
         return
     if workers == 0:
-        from ..batch import worker_threads
+        from ..engine.batch import worker_threads
 
         workers = worker_threads(1)
     mode = "skip-existing" if skip_existing else "update" if update else "all"

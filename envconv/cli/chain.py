@@ -1,6 +1,6 @@
 """Chained steps: ``envconv read IN resample --to L write OUT …``.
 
-Each command returns a step object of :mod:`envconv.pipeline`; the group's result callback
+Each command returns a step object of :mod:`envconv.engine.pipeline`; the group's result callback
 hands the list to :func:`envconv.cli.compose.run_chain`, which validates the whole chain before
 reading a pixel and then runs it (or, after ``batch``, runs it once per input).
 """
@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import click
 
-from ..pipeline import Colorspace, Exposure, Read, Resample, Rotate, Write
+from ..engine.pipeline import Colorspace, Exposure, Read, Resample, Rotate, Write
 from .main import cli
 from .options import (
     color_options,

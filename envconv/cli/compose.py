@@ -27,9 +27,9 @@ def run_chain(steps: list) -> None:
     """Validate and run a chain of steps; a leading batch spec runs them per input.
 
     The whole chain is checked, then planned from headers and the output policy applied
-    (:mod:`envconv.outputs`), before any pixel is read.
+    (:mod:`envconv.engine.outputs`), before any pixel is read.
     """
-    from ..pipeline import Pipeline
+    from ..engine.pipeline import Pipeline
     from .batch import BatchSpec, run_batch_command
 
     if isinstance(steps[0], BatchSpec):

@@ -45,7 +45,7 @@ def convert_command(input_path, output_path, dry_run, preview, no_clobber, **opt
       envconv convert sky.exr sky_cross.exr --to cube-vcross --size 512
       envconv convert sky.exr sky.png --to latlong --exposure -1 --dry-run
     """
-    from ..api import convert_file, plan_convert
+    from ..engine.api import convert_file, plan_convert
 
     read_kw, resample_kw, write_kw, color_kw = split_options(options, with_color=True)
     write_kw["no_clobber"] = no_clobber

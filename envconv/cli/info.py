@@ -32,7 +32,7 @@ def info_command(input_path, from_, level, part, stats, as_json):
       envconv info sky.exr --json
       envconv info sky.exr --stats
     """
-    from ..info import describe
+    from ..views.info import describe
 
     record = describe(input_path, layout=from_, level=level, part=part, stats=stats)
     if as_json:

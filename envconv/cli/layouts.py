@@ -21,8 +21,8 @@ def layouts_command():
     Example:
       envconv layouts
     """
-    from ..facesets import FACE_SETS
     from ..layouts import ALIASES, LAYOUTS
+    from ..layouts.facesets import FACE_SETS
 
     width = max(len(name) for name in LAYOUTS)
     for name, layout in LAYOUTS.items():

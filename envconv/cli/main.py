@@ -10,7 +10,7 @@ Exit statuses: 0 success; 2 bad usage (click's usage errors and envconv's own
 :class:`envconv.errors.UsageError`); 1 a run-time failure (any other
 :class:`envconv.errors.EnvconvError`: a missing or damaged file, a layout that does not fit);
 3 an internal error, a bug in envconv (one line naming the exception; set ``ENVCONV_DEBUG=1``
-for the traceback); 130 or 143 when SIGINT or SIGTERM ends a run (:mod:`envconv.interrupt`). Running out of memory is a run-time failure (1). Each
+for the traceback); 130 or 143 when SIGINT or SIGTERM ends a run (:mod:`envconv.engine.interrupt`). Running out of memory is a run-time failure (1). Each
 error is one line on stderr; stdout carries results only.
 """
 
@@ -163,7 +163,7 @@ class EnvconvGroup(click.Group):
             raise
         except BrokenPipeError:  # `envconv layouts | head`: click exits quietly
             raise
-        except KeyboardInterrupt as exc:  # SIGINT or SIGTERM (envconv.interrupt): 130 or 143
+        except KeyboardInterrupt as exc:  # SIGINT or SIGTERM (envconv.engine.interrupt): 130 or 143
             _interrupted(exc)
         except MemoryError as exc:  # not a bug: the machine is too small for this run
             detail = one_line(str(exc)) if str(exc).strip() else ""
@@ -210,15 +210,15 @@ def cli(verbose: int, threads: int | None) -> None:
         logging.addLevelName(number, logging.getLevelName(number).lower())
     logging.basicConfig(level=level, format="envconv: %(levelname)s: %(message)s")
     if threads is not None:
-        from ..kernels import set_threads
+        from ..resample.kernels import set_threads
 
         set_threads(threads)
 
 
 def _interrupted(exc: BaseException) -> None:
-    from ..interrupt import describe, done, exit_status
+    from ..engine.interrupt import describe, done, exit_status
 
-    if done():  # not yet reported by the watchdog (envconv.interrupt)
+    if done():  # not yet reported by the watchdog (envconv.engine.interrupt)
         click.echo(f"envconv: error: {describe(exc)}", err=True)
     sys.exit(exit_status(exc))
 
@@ -238,7 +238,7 @@ def main() -> None:
 
     os.environ.setdefault(*BLAS_THREADS)
 
-    from ..interrupt import install
+    from ..engine.interrupt import install
     from .messages import show_warning
 
     warnings.showwarning = show_warning  # a Python warning is one line too

@@ -2,8 +2,8 @@
 
 Each group is a list of click decorators whose parameter names equal the keyword arguments of
 the library function they are passed to: ``READ`` → :func:`envconv.io.read`, ``RESAMPLE`` →
-:func:`envconv.resample.convert`, ``WRITE`` → :func:`envconv.io.write`, ``COLOR`` →
-:func:`envconv.prepare.prepare_input`. A command splits its
+:func:`envconv.resample.convert.convert`, ``WRITE`` → :func:`envconv.io.write`, ``COLOR`` →
+:func:`envconv.color.prepare.prepare_input`. A command splits its
 keyword arguments with :func:`split_options`. Layout choices come from the registry.
 """
 
@@ -13,7 +13,7 @@ import click
 
 from ..errors import LayoutError
 from ..layouts import layout_names, resolve_layout_name
-from ..resample import FILTERS
+from ..resample.convert import FILTERS
 
 __all__ = [
     "refuse_overwrite",
@@ -48,7 +48,7 @@ def layout_choice() -> click.Choice:
 
 
 def _checked(check, value):
-    """``check(value)`` (a check of :mod:`envconv.sampling`), its UsageError as click's."""
+    """``check(value)`` (a check of :mod:`envconv.resample.options`), its UsageError as click's."""
     from ..errors import UsageError
 
     try:
@@ -60,7 +60,7 @@ def _checked(check, value):
 def parse_samples(ctx, param, value):
     if value is None or value == "auto":
         return "auto"
-    from ..sampling import check_samples
+    from ..resample.options import check_samples
 
     return _checked(check_samples, value)
 
@@ -70,7 +70,7 @@ def parse_guard(ctx, param, value):
         return 0
     if value == "fill":
         return "fill"
-    from ..sampling import check_guard
+    from ..resample.options import check_guard
 
     return _checked(check_guard, value)
 
@@ -80,7 +80,7 @@ def parse_mips(ctx, param, value):
     ``--mips ggx`` (``ggx:K``): the GGX-prefiltered chain (``box`` is the default filter)."""
     if value is None:
         return None
-    from ..sampling import check_mips
+    from ..resample.options import check_mips
 
     text = str(value)
     levels, ggx = _checked(check_mips, int(text) if text.isdigit() else text)
@@ -123,7 +123,7 @@ WRITE = [
     _OCIO_CONFIG,
 ]  # fmt: skip
 
-#: Options of :func:`envconv.prepare.prepare_input` (range and NaN/Inf of the source).
+#: Options of :func:`envconv.color.prepare.prepare_input` (range and NaN/Inf of the source).
 COLOR = [
     ("exposure", click.option("--exposure", type=float, default=0.0, metavar="STOPS", help="Scale colour by 2**STOPS before resampling (e.g. -2 to fit HDR into 8 bits).")),
     ("fix_nonfinite", click.option("--fix-nonfinite", "fix_nonfinite", type=click.Choice(["none", "black", "box3", "error"]), default="none", show_default=True, help="Replace NaN/Inf in the input: with 0, with the mean of finite 3x3 neighbours, or stop.")),
@@ -153,7 +153,7 @@ def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
     """Split a command's keyword arguments into (read, resample, write) keyword dicts.
 
     With ``with_color=True`` a fourth dict holds the ``COLOR`` options (for
-    :func:`envconv.prepare.prepare_input`). A name in two groups goes to both.
+    :func:`envconv.color.prepare.prepare_input`). A name in two groups goes to both.
     """
     groups = [{k for k, _ in READ}, {k for k, _ in RESAMPLE}, {k for k, _ in WRITE}]
     if with_color:
@@ -163,9 +163,9 @@ def split_options(options: dict, with_color: bool = False) -> tuple[dict, ...]:
 
 def refuse_overwrite(input_path: str, output_path: str) -> None:
     """Usage error when ``output_path`` is the input, or one file of a ``{face}`` input, also
-    through a link (the output policy of :mod:`envconv.outputs`)."""
+    through a link (the output policy of :mod:`envconv.engine.outputs`)."""
+    from ..engine.outputs import check_outputs, input_files
     from ..errors import UsageError
-    from ..outputs import check_outputs, input_files
 
     try:
         check_outputs([(output_path, False)], input_files(input_path))
@@ -173,5 +173,5 @@ def refuse_overwrite(input_path: str, output_path: str) -> None:
         raise click.UsageError(str(exc)) from None
 
 
-#: ``-n/--no-clobber`` of convert, write, run and batch (the output policy: envconv.outputs).
+#: ``-n/--no-clobber`` of convert, write, run and batch (the output policy: envconv.engine.outputs).
 no_clobber_option = click.option("-n", "--no-clobber", "no_clobber", is_flag=True, help="Refuse, before any work, to replace an output that exists (by default it is replaced atomically).")  # fmt: skip

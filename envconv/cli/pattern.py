@@ -57,8 +57,8 @@ def pattern_command(output_path, to, size, samples, convention, guard, alpha, **
       envconv pattern sky_{face}.tga --to cube-faces --out-convention quake
     """
     from .. import io
-    from ..api import route_face_sets
-    from ..pattern import render_pattern
+    from ..engine.api import route_face_sets
+    from ..views.pattern import render_pattern
 
     _, _, write_kw = split_options(options)
     resample_kw = {"to": to, "out_convention": convention}

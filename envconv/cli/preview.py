@@ -30,10 +30,10 @@ def preview_command(input_path, output_path, layout, in_convention, convention, 
       envconv preview blender_sky.exr -o sheet.png --in-convention blender --convention blender
     """
     from .. import io
-    from ..conventions import world_frame
     from ..errors import UsageError
     from ..io.picture import write_picture
-    from ..preview import contact_sheet
+    from ..layouts.conventions import world_frame
+    from ..views.preview import contact_sheet
 
     refuse_overwrite(input_path, output_path)
     try:  # an unknown name is a usage error, found before any reading

@@ -98,7 +98,7 @@ class ResampleProgress:
     conversion resamples: only on a terminal (a pipe or a log stays quiet), only once the
     command has run for ``delay`` seconds, redrawn in place and erased at the end.
 
-    It watches the kernels' progress counter (:func:`envconv.kernels.watch_progress`).
+    It watches the kernels' progress counter (:func:`envconv.resample.kernels.watch_progress`).
     """
 
     def __init__(self, delay: float = 2.0, tty: bool | None = None) -> None:
@@ -110,7 +110,7 @@ class ResampleProgress:
 
     def __enter__(self) -> ResampleProgress:
         if self.tty:
-            from ..kernels import watch_progress
+            from ..resample.kernels import watch_progress
 
             self._previous = watch_progress(self.update)
         return self
@@ -127,7 +127,7 @@ class ResampleProgress:
     def __exit__(self, *exc: Any) -> None:
         if not self.tty:
             return
-        from ..kernels import watch_progress
+        from ..resample.kernels import watch_progress
 
         watch_progress(self._previous)
         if self._drawn:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import click
 
-from ..batch import expand_inputs, make_jobs
-from ..graph import load_graph
+from ..engine.batch import expand_inputs, make_jobs
+from ..engine.graph import load_graph
 from .batch import batch_options, execute
 from .main import cli
 

@@ -31,6 +31,6 @@ def sh_command(input_path, from_, frame):
       envconv sh sky.exr > sky_sh.json
     """
     from ..io import read
-    from ..sh import sh_record
+    from ..resample.harmonics import sh_record
 
     click.echo(json.dumps(sh_record(read(input_path, layout=from_), frame), indent=2))

@@ -37,7 +37,7 @@ def view_command(input_path, output_path, open_page, layout, in_convention, inpu
     """
     from .. import io
     from ..io.picture import write_page
-    from ..viewer import build_page
+    from ..views.viewer import build_page
 
     output_path = output_path or _default_output(input_path)
     refuse_overwrite(input_path, output_path)

@@ -6,8 +6,8 @@
    the format's default (see ``envconv.io.FORMATS``).
 2. Colour is converted from the map's colour space (its ``oiio:ColorSpace``, the working
    space for maps read by envconv) to ``output_colorspace``, else the default of the output
-   format and pixel type (:func:`envconv.color.default_colorspace`).
-3. Values are quantized (:func:`envconv.quantize.quantize`): 8-bit output is dithered unless
+   format and pixel type (:func:`envconv.color.ocio.default_colorspace`).
+3. Values are quantized (:func:`envconv.color.quantize.quantize`): 8-bit output is dithered unless
    ``dither=False``; values outside [0, 1] in an integer format and beyond ±65504 in half
    are clipped, with one warning line giving the fraction of pixels clipped. Radiance HDR
    cannot store negative numbers: they are set to 0, with a warning.
@@ -29,7 +29,8 @@ from typing import Any
 
 import numpy as np
 
-from .. import color, quantize
+from ..color import ocio as color
+from ..color import quantize
 from ..envmap import EnvMap
 from .formats import WRITE_FORMATS, check_compression, choose_pixel_type, extension
 
@@ -178,7 +179,7 @@ ENCODE_BLOCK_BYTES = 1 << 22
 def _check_memory(levels: list[np.ndarray], plan: OutputPlan, config, where: str,
                   lazy: bool = False) -> None:  # fmt: skip
     """Refuse, before encoding, when the encoded copy of the levels cannot fit in memory."""
-    from .. import memory
+    from ..engine import memory
 
     held = sum(level.nbytes for level in levels)
     copy = _converts(plan, config) or plan.format == "hdr"

@@ -1,7 +1,7 @@
 """The files of multi-file maps: ``{face}`` paths, their face sets, and reading the six parts.
 
 A ``{face}`` path names one file per face. ``cube-faces`` files are named by a face set
-(:mod:`envconv.facesets`: envconv's own px … nz, Quake's ft bk lf rt up dn, Unity's Front …);
+(:mod:`envconv.layouts.facesets`: envconv's own px … nz, Quake's ft bk lf rt up dn, Unity's Front …);
 ``paraboloid-split`` files are front and back. When the caller names no face set, the set is
 found from the files that exist: exactly one complete set of names must match. A set whose
 names are all part of a larger matching set gives way to it (front and back of a Unity skybox
@@ -16,8 +16,8 @@ import os
 from typing import NamedTuple
 
 from ..errors import ImageIOError, LayoutError
-from ..facesets import FACE_SETS, FaceSet, get_face_set
 from ..layouts import get_layout
+from ..layouts.facesets import FACE_SETS, FaceSet, get_face_set
 
 __all__ = ["FaceFiles", "find_face_files", "part_path", "first_file", "files_of"]
 

@@ -1,5 +1,5 @@
-"""Writing 8-bit pictures and viewer pages: the file side of :mod:`envconv.preview` and
-:mod:`envconv.viewer`.
+"""Writing 8-bit pictures and viewer pages: the file side of :mod:`envconv.views.preview` and
+:mod:`envconv.views.viewer`.
 
 A picture is display-referred uint8 RGB, already tone-mapped; it is written as is, with no
 colour conversion, to a temporary file that is then renamed into place.

@@ -16,9 +16,9 @@ import os
 from dataclasses import dataclass
 from typing import Any
 
-from ..detect import find_layout, place_image
 from ..errors import ImageIOError, LayoutError
 from ..layouts import Layout, get_layout
+from ..layouts.detect import find_layout, place_image
 from .files import FileHeader, read_file_header
 
 __all__ = ["Probe", "probe"]

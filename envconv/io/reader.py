@@ -2,11 +2,11 @@
 
 Formats: OpenEXR (half or float), Radiance HDR, TIFF, PNG and JPEG, chosen by the file
 extension. Pixels are always float32 in memory, in scene-linear Rec.709: :func:`read` and
-:func:`write` convert colour, range and bit depth through :mod:`envconv.color` and :mod:`envconv.io.encode`.
+:func:`write` convert colour, range and bit depth through :mod:`envconv.color.ocio` and :mod:`envconv.io.encode`.
 
 Multi-file layouts (cube-faces, paraboloid-split) name their parts with ``{face}`` in the path:
 px nx py ny pz nz, or front back. ``faces=`` names another program's skybox files and face
-orientations (Quake's ft bk lf rt up dn, Unity's Front …: :mod:`envconv.facesets`); reading
+orientations (Quake's ft bk lf rt up dn, Unity's Front …: :mod:`envconv.layouts.facesets`); reading
 finds the set from the files that exist when it is not given (:mod:`envconv.face_files`).
 
 This module reads maps (files through :mod:`envconv.io.files`); writing lives in
@@ -22,18 +22,11 @@ from typing import Any
 
 import numpy as np
 
-from ..detect import place_image
 from ..envmap import EnvMap
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
-from .files import (
-    FileHeader,
-    _open_input,
-    read_file,
-    read_file_header,
-    read_image,
-    read_pixel_type,
-)
+from ..layouts.detect import place_image
+from .files import FileHeader, _open_input, read_file, read_file_header, read_image, read_pixel_type
 
 __all__ = ["read", "read_unplaced", "read_image", "read_header", "read_pixel_type", "mip_levels",
            "resample_edge_aligned"]  # fmt: skip
@@ -78,18 +71,18 @@ def read(
         that is an image of the first part's windows (see :mod:`envconv.io.files`).
     faces : str, optional
         Face set of a ``{face}`` path of six skybox files (``quake``, ``unity-6sided``,
-        ``threejs``, ``godot``, ``unreal``, ``envconv``; see :mod:`envconv.facesets`). Each
+        ``threejs``, ``godot``, ``unreal``, ``envconv``; see :mod:`envconv.layouts.facesets`). Each
         file is turned into envconv's face, so the result is an ordinary ``cube-faces`` map.
         Default: found from the file names; several matching sets are a LayoutError.
 
     The map is the file's display window (:mod:`envconv.io.files`). Where the data window
     leaves holes, every channel is 0 there, an alpha channel ``A`` (1 elsewhere) is added
     when the file has none, and ``EnvMap.valid`` marks them. Pixels are converted to linear
-    Rec.709 by :func:`envconv.color.to_working`. A lat-long stored with edge-aligned
+    Rec.709 by :func:`envconv.color.ocio.to_working`. A lat-long stored with edge-aligned
     samples (``oiio:sampleborder``, as OpenEXR envmaps written by other tools) is resampled
     onto pixel centres (:func:`resample_edge_aligned`).
     """
-    from ..color import to_working
+    from ..color.ocio import to_working
 
     path = os.fspath(path)
     if "{face}" in path:
@@ -118,8 +111,8 @@ def read(
 
 def _check_memory(path: str, level: int, part, files: int = 1) -> None:
     """Refuse, from the header and before any pixel is read, an image (or ``files`` images of
-    one size, placed side by side) whose reading cannot fit in memory (:mod:`envconv.memory`)."""
-    from .. import memory
+    one size, placed side by side) whose reading cannot fit in memory (:mod:`envconv.engine.memory`)."""
+    from ..engine import memory
 
     header = read_file_header(path, level, part)
     holes = header.holes
@@ -189,7 +182,7 @@ def _read_multi(template: str, layout: str | None, level: int, part: str | None,
     pixels = [c[0] for c in cells]
     valids = [c[3] for c in cells]
     if files.face_set is not None:
-        from ..facesets import to_envconv
+        from ..layouts.facesets import to_envconv
 
         pixels = to_envconv(files.face_set, pixels)
         if holes:

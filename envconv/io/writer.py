@@ -38,7 +38,7 @@ def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=
 
     With ``{level}`` in the path every one of ``levels`` mip levels is a file of its own
     (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``. ``faces``
-    names the files of a ``cube-faces`` map by a face set (:mod:`envconv.facesets`). A DDS or
+    names the files of a ``cube-faces`` map by a face set (:mod:`envconv.layouts.facesets`). A DDS or
     KTX2 file holds every face and level itself.
     """
     path = os.fspath(path)
@@ -73,7 +73,7 @@ def _face_names(layout, faces) -> tuple[str, ...]:
     """File-name parts of a layout's faces, or of a face set's files (cube-faces only)."""
     if faces is None:
         return layout.face_names
-    from ..facesets import get_face_set
+    from ..layouts.facesets import get_face_set
 
     face_set = get_face_set(faces)
     if layout.name != "cube-faces":
@@ -107,7 +107,7 @@ def write(
     as one file per level when the path holds ``{level}`` (any format; each file is tagged
     ``envconv:level``). Alpha is written unassociated (never premultiplied). ``faces`` writes a
     ``cube-faces`` map as another program's six skybox files (names and face turns of
-    :mod:`envconv.facesets`). A ``.dds`` or ``.ktx2`` path gets a texture container with every
+    :mod:`envconv.layouts.facesets`). A ``.dds`` or ``.ktx2`` path gets a texture container with every
     level (:mod:`envconv.textures`). Returns the paths written.
     """
     from .encode import encode_output
@@ -209,7 +209,7 @@ def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
     cells = [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
     if faces is None:
         return cells
-    from ..facesets import from_envconv
+    from ..layouts.facesets import from_envconv
 
     return from_envconv(faces, cells)
 
@@ -219,7 +219,7 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
     with parts is written as a multi-part OpenEXR file, one part per entry of ``parts``."""
     fmt = format_of(target)[0]
     if len(images) > 1:
-        from ..mips import full_level_count
+        from ..resample.mips import full_level_count
 
         full = full_level_count(images[0].shape[1], images[0].shape[0])
         if fmt not in ("openexr", "tiff"):

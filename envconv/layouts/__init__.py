@@ -9,6 +9,7 @@ from __future__ import annotations
 import difflib
 
 from ..errors import LayoutError
+from ..lazy import package_getattr
 from . import (
     angular,
     cube_exr,
@@ -90,3 +91,7 @@ def get_layout(name: str | Layout) -> Layout:
     if isinstance(name, Layout):
         return name
     return LAYOUTS[resolve_layout_name(name)]
+
+
+# The geometry, rotation, conventions, face-set and detection modules load on first use.
+__getattr__ = package_getattr(__name__)

@@ -148,19 +148,19 @@ class Layout:
     def face_to_dir(self, face, a, b) -> np.ndarray:
         """Unit directions (..., 3) of local points (a, b) of ``face`` (arrays broadcast),
         continued past the valid region as guard rings and filter taps read it."""
-        from ..kernels import face_to_dir
+        from ..resample.kernels import face_to_dir
 
         return face_to_dir(self.family, face, a, b)
 
     def dir_to_face(self, dirs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(face, a, b) of unit directions (..., 3), with (a, b) in the face's valid region."""
-        from ..kernels import dir_to_face
+        from ..resample.kernels import dir_to_face
 
         return dir_to_face(self.family, dirs)
 
     def density(self, face, a, b) -> np.ndarray:
         """Solid angle per unit (a, b) area, in steradians, at local points of ``face``."""
-        from ..kernels import density
+        from ..resample.kernels import density
 
         return density(self.family, face, a, b)
 

@@ -35,7 +35,7 @@ pixel of the square. Continued mapping: the octahedral fold of :mod:`.octahedral
 ((a, b) -> (2 - a, -b) past a = 1, and so on), which is pbrt-v4's ``WrapEqualAreaSquare``.
 Solid angle per unit (a, b) area: π everywhere (4π over the area-4 square).
 
-The ``pbrt`` preset (:mod:`envconv.conventions`) is pbrt-v4's own square: pixel (u, v), v from
+The ``pbrt`` preset (:mod:`envconv.layouts.conventions`) is pbrt-v4's own square: pixel (u, v), v from
 the top row, holds EqualAreaSquareToSphere(u, v) in pbrt's z-up light frame, and a lat-long
 is read there at (atan2(y, x)/2π mod 1, acos(z)/π), as ``imgtool makeequiarea`` does.
 """

@@ -35,7 +35,7 @@ one-pixel guard ring is then exactly the border RTXGI's ProbeBorderUpdateCS copi
 probe. Solid angle per unit (a, b) area: 1 / |t|³ before normalising, from 1 at the centre,
 axes and corners to 3√3 at the middle of each octant.
 
-Presets (:mod:`envconv.conventions`): ``ddgi`` (the DDGI/RTXGI encoding in a Y-up
+Presets (:mod:`envconv.layouts.conventions`): ``ddgi`` (the DDGI/RTXGI encoding in a Y-up
 right-handed world, so its centre is world +Z), ``ddgi-z-up`` (in a Z-up right-handed world,
 centre up; envconv's own layout) and ``unreal`` (RTXGI in Unreal's Z-up left-handed world).
 """

@@ -3,7 +3,7 @@
 // The footprint of an output pixel is the number of source texels its edges span there, along
 // each axis: from a tile's grid (tiles.h) or, for exactly mapped pixels, from the Jacobian at
 // the pixel's centre (pixel_footprint). The rules and their reasons are stated in
-// envconv/resample.py and docs/conventions.md; the constants are exported to Python.
+// envconv/resample/convert.py and docs/conventions.md; the constants are exported to Python.
 #pragma once
 
 #include <algorithm>

@@ -1,6 +1,6 @@
 // Image-based lighting kernels: the GGX (Trowbridge-Reitz) prefilter of the split-sum
 // approximation, the clamped-cosine (irradiance) convolution, and the order-2 spherical-harmonic
-// projection. envconv/ibl.py and envconv/sh.py wrap them and carry the docs.
+// projection. envconv/resample/ibl.py and envconv/resample/harmonics.py wrap them and carry the docs.
 //
 // Prefilter. With N = V = R the lobe is zonal: level k holds
 //   L_k(n) = Int L(l) K(n.l) dl / Int K(n.l) dl,   K(t) = D(h) t+,  n.h = sqrt((1 + t) / 2),

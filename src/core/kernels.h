@@ -1,4 +1,4 @@
-// The kernels the Python side calls (envconv/kernels.py wraps each one, validates its arrays and
+// The kernels the Python side calls (envconv/resample/kernels.py wraps each one, validates its arrays and
 // carries its docstring). Arrays arrive as raw C-contiguous views; the GIL is released by the
 // bindings around every call.
 #pragma once
@@ -33,7 +33,7 @@ struct RipMap {
     int64_t rows;
 };
 
-// Fill `out` with the resampled environment; see envconv/resample.py for the rules.
+// Fill `out` with the resampled environment; see envconv/resample/convert.py for the rules.
 // samples <= 0 asks for adaptive sampling. `progress`, when not null, counts the bands of
 // kTile output rows finished (atomically), for a watcher on another thread.
 void resample(const Image& src, const RipMap& rip, const Conversion& cv, int samples, int filter,

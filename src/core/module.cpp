@@ -1,6 +1,6 @@
 // Python bindings of the native core: envconv._core.
 //
-// Each function takes C-contiguous numpy arrays of the stated dtypes (envconv/kernels.py makes
+// Each function takes C-contiguous numpy arrays of the stated dtypes (envconv/resample/kernels.py makes
 // them so, allocates the outputs and carries the docstrings), releases the GIL and runs on
 // `threads` threads. A layout instance arrives as four arrays: geo = [family, N, G, aspect,
 // columns, rows] (int64) and the int32 tables cell -> face, cell -> half turns, face -> cell.
@@ -333,7 +333,7 @@ void sh_project(Array<const float, nb::ndim<3>> image, GeoArray geo, TableArray 
 }  // namespace
 
 NB_MODULE(_core, m) {
-    m.doc() = "envconv's native kernels; use them through envconv.kernels.";
+    m.doc() = "envconv's native kernels; use them through envconv.resample.kernels.";
     m.def("resample", &resample, "src"_a, "rip"_a, "rip_levels"_a, "rip_rows"_a, "sgeo"_a,
           "s_cell_face"_a, "s_cell_turns"_a, "s_face_cell"_a, "dgeo"_a, "d_cell_face"_a,
           "d_cell_turns"_a, "d_face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "filter"_a,

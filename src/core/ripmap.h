@@ -4,7 +4,7 @@
 // of level-0 texels i 2^k ... (i+1) 2^k - 1 of the same row, so a level-0 image point x is
 // point x / 2^k of level k (the pixel-centre rule holds at every level). Levels 1 ... K are
 // packed side by side in one (H, W - W_K, C) float32 array; level k starts at column
-// W - 2 W_k with W_k = W / 2^k. See envconv/kernels.py for the level count rule.
+// W - 2 W_k with W_k = W / 2^k. See envconv/resample/kernels.py for the level count rule.
 #pragma once
 
 #include <algorithm>

@@ -1,0 +1,362 @@
+"""The one walker over pipeline steps: it checks, plans and runs them.
+
+Private to :mod:`envconv.engine.pipeline`, whose docstring states the rules implemented here. One
+:class:`Walk` goes over the steps in one of three modes, with the same state changes in each, so
+what is checked, what is planned and what runs cannot drift apart:
+
+* ``check``: no file is touched; the order of the steps and the ``Write`` paths are checked.
+* ``plan``: headers only; every output's layout, size, levels and files, and each write's
+  output settings (bit depth, compression, colour space).
+* ``run``: pixels are read, prepared, resampled, changed and written.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+from dataclasses import dataclass, replace
+from types import SimpleNamespace
+from typing import Any
+
+from .. import io
+from ..errors import EnvconvError, ImageIOError, UsageError
+from ..layouts import get_layout
+from .steps import (
+    _IO_PLACEHOLDERS,
+    VARIABLES,
+    Colorspace,
+    Exposure,
+    Output,
+    Read,
+    Resample,
+    Rotate,
+    Step,
+    Write,
+    compose_rotations,
+    count_levels,
+    path_variables,
+    template_names,
+)  # fmt: skip
+
+__all__ = ["Walk", "SourceHeader"]
+
+log = logging.getLogger(__name__)
+MODES = ("check", "plan", "run")
+
+
+class SourceHeader:
+    """What a plan knows of a source: layout, size, guard and channels, from the header."""
+
+    def __init__(self, path: str, options: dict[str, Any]) -> None:
+        from ..layouts.detect import place_image
+
+        level = int(options.get("level", 0) or 0)
+        layout, first = options.get("layout"), path
+        if "{face}" in path:
+            from ..io.face_files import find_face_files
+
+            files = find_face_files(path, layout, options.get("faces"))
+            layout, first = files.layout, files.paths[0]
+        width, height, channels, metadata = io.read_header(first, level, options.get("part"))
+        if layout is not None and get_layout(layout).multi_file:
+            width *= get_layout(layout).n_faces
+        found, guard, size = place_image(width, height, metadata, layout, level=level)
+        self.layout, self.guard, self.channels, self.size = found, guard, channels, size
+
+
+@dataclass
+class _Latest:
+    """The latest output: its record, its pixels (run mode), whether a write has taken it,
+    whether it is the source itself, whether a rotate came after it, and the colour space a
+    colorspace step put it in ((name, config) or None)."""
+
+    record: Output | None
+    env: Any
+    layout: str | None
+    written: bool = False
+    is_source: bool = False
+    stale_at: int | None = None
+    space: tuple[str, str | None] | None = None
+
+
+class Walk:
+    """One pass over the steps in ``mode`` (``check``, ``plan`` or ``run``).
+
+    ``written`` collects each file as it is written (run mode); ``warnings`` collects one-line
+    warnings (NaN/Inf, clipping) when it is a list, else they are logged. ``targets`` lists
+    (file, no_clobber) of every write (plan and run modes).
+    """
+
+    def __init__(self, variables: dict[str, str], mode: str, keep: bool = False,
+                 written: list[str] | None = None, warnings: list[str] | None = None) -> None:  # fmt: skip
+        assert mode in MODES, mode
+        self.variables, self.mode, self.keep = variables, mode, keep
+        self.written = written if written is not None else []
+        self.warnings = warnings
+        self.outputs: list[Output] = []
+        self.targets: list[tuple[str, bool]] = []
+        self.source: Any = None
+        self.source_space: tuple[str, str | None] | None = None
+        self.input: str | None = None
+        self.rotation = None
+        self.latest: _Latest | None = None
+        self.index = 0
+
+    def walk(self, steps: list[Step], require_writes: bool = False) -> list[Output]:
+        for self.index, step in enumerate(steps, 1):
+            if not isinstance(step, Read) and self.input is None and self.source is None:
+                raise UsageError(f"{self._where(step)}: comes before any read")
+            getattr(self, f"_{step.kind}")(step)
+            if require_writes and isinstance(step, Resample) and not _written_later(steps, self.index):
+                raise UsageError(f"{self._where(step)}: this resample is never written; "
+                                 "add a write step")  # fmt: skip
+        return self.outputs
+
+    def _where(self, step: Step) -> str:
+        return f"step {self.index} ({step.kind})"
+
+    def _warn(self, messages: list[str]) -> None:
+        if self.warnings is None:
+            for message in messages:
+                log.warning("%s", message)
+        else:
+            self.warnings.extend(messages)
+
+    # --- read, rotate, pixel steps ----------------------------------------------------------
+
+    def _read(self, step: Read) -> None:
+        self.input = step.params["path"]
+        if self.input is None:
+            raise UsageError(f"{self._where(step)}: read needs a file (only a batch supplies one)")
+        if self.mode == "run":
+            from ..color.prepare import prepare_input
+
+            source = io.read(self.input, **step.read_options)
+            self.source, notes = prepare_input(source, **step.prepare_options)
+            self._warn(notes)
+        elif self.mode == "plan":
+            self.source = SourceHeader(self.input, step.read_options)
+        else:
+            self.source = SimpleNamespace()
+        self.rotation, self.latest, self.source_space = None, None, None
+
+    def _rotate(self, step: Rotate) -> None:
+        latest = self.latest
+        if latest is not None and not latest.written:
+            raise UsageError(f"{self._where(step)}: rotate follows a resample, so the output "
+                             "would be resampled twice; put rotate before resample")  # fmt: skip
+        if latest is not None and latest.is_source:
+            self.latest = None  # a later write resamples the turned source into its layout
+        elif latest is not None:
+            latest.stale_at = self.index
+        self.rotation = compose_rotations(self.rotation, step.params["angles"])
+
+    def _exposure(self, step: Exposure) -> None:
+        self._pixel_step(lambda env: _apply_exposure(env, step.params["stops"]), None)
+
+    def _colorspace(self, step: Colorspace) -> None:
+        params = step.params
+        self._pixel_step(lambda env: _apply_colorspace(env, **params),
+                         (params["dst"], params["config"]))  # fmt: skip
+
+    def _pixel_step(self, fn, space) -> None:
+        """Change the latest output alone while it is unwritten; after a write (or with no
+        output), change the source and the latest output both."""
+        latest, run = self.latest, self.mode == "run"
+        if latest is not None and not latest.written:
+            self._change_latest(fn, space, run)
+            return
+        if run:
+            self.source = fn(self.source)
+        self.source_space = space or self.source_space
+        if latest is not None:
+            if latest.is_source:
+                latest.env = self.source if run else None
+                latest.space = self.source_space
+                if latest.record is not None and latest.record.envmap is not None:
+                    latest.record.envmap = self.source
+            else:
+                self._change_latest(fn, space, run)
+
+    def _change_latest(self, fn, space, run: bool) -> None:
+        latest = self.latest
+        if run:
+            latest.env = fn(latest.env)
+            if latest.record.envmap is not None:
+                latest.record.envmap = latest.env
+        latest.space = space or latest.space
+
+    # --- resample and write -----------------------------------------------------------------
+
+    def _resample(self, step: Resample) -> None:
+        self._make_output(step.params["to"], step.convert_kwargs(self.rotation), step.params["mips"])
+
+    def _make_output(self, to: str, kwargs: dict[str, Any], mips: Any) -> None:
+        layout = get_layout(to)
+        record, env = None, None
+        if self.mode != "check":
+            guard = kwargs.get("guard", 0)
+            guard = 0 if guard == "fill" else int(guard)
+            if self.mode == "run":
+                from ..resample.convert import convert
+
+                env = convert(self.source, **kwargs)
+                size = env.size
+            else:
+                from ..resample.convert import default_size
+
+                size = kwargs.get("size") or default_size(
+                    SimpleNamespace(size=self.source.size, layout=self.source.layout), layout,
+                    kwargs.get("out_convention"),
+                )  # fmt: skip
+            width, height = layout.file_size(size, guard)
+            record = Output(self.input, layout.name, int(size), guard, width, height,
+                            count_levels(width, height, mips))  # fmt: skip
+            record.envmap = env if self.keep else None
+            self.outputs.append(record)
+        self.latest = _Latest(record, env, layout.name, space=self.source_space)
+
+    def _write(self, step: Write) -> None:
+        self._check_template(step)
+        latest = self.latest
+        if latest is not None and latest.stale_at is not None:
+            raise UsageError(f"{self._where(step)}: the latest output was resampled before the "
+                             f"rotate of step {latest.stale_at}; add a resample after the "
+                             "rotate")  # fmt: skip
+        if latest is None:
+            if self.rotation is not None:
+                layout = None if self.mode == "check" else self.source.layout.name
+                kwargs = {} if self.mode == "check" else {
+                    "to": layout, "size": self.source.size, "guard": self.source.guard,
+                    "rotate": self.rotation}  # fmt: skip
+                self._make_output(layout or "latlong", kwargs, None)
+                self.latest.layout = layout
+            else:
+                self._write_source()
+        if self.mode != "check":
+            self._write_files(step, self.latest)
+        self.latest.written = True
+
+    def _check_template(self, step: Write) -> None:
+        known = set(VARIABLES) | set(self.variables) | set(_IO_PLACEHOLDERS)
+        template = step.params["path"]
+        for name in template_names(template) + template_names(step.params["preview"] or ""):
+            if name not in known:
+                raise UsageError(f"{self._where(step)}: path: unknown variable {{{name}}} in "
+                                 f"{template!r}; known: "
+                                 + ", ".join(f"{{{k}}}" for k in sorted(known)))  # fmt: skip
+        layout = self.latest.layout if self.latest is not None else None
+        if layout is not None and not self.latest.is_source:
+            try:
+                io.output_paths(layout, template, faces=step.options.get("faces"))
+            except EnvconvError as exc:
+                raise UsageError(f"{self._where(step)}: path: {exc}") from None
+
+    def _write_source(self) -> None:
+        record, src = None, self.source
+        if self.mode != "check":
+            width, height = src.layout.file_size(src.size, src.guard)
+            record = Output(self.input, src.layout.name, src.size, src.guard, width, height)
+            if self.keep and self.mode == "run":
+                record.envmap = src
+            self.outputs.append(record)
+        env = src if self.mode == "run" else None
+        layout = None if self.mode == "check" else src.layout.name
+        self.latest = _Latest(record, env, layout, is_source=True, space=self.source_space)
+
+    def _write_files(self, step: Write, latest: _Latest) -> None:
+        record = latest.record
+        variables = {**path_variables(self.input), "layout": record.layout, "size": record.size}
+        path = step.target(variables, user=self.variables)
+        options = dict(step.options)
+        if latest.space is not None and not options.get("output_colorspace"):
+            # A colorspace step chose the colour space: the write keeps it (and tags it).
+            options["output_colorspace"] = latest.space[0]
+            if latest.space[1] and not options.get("ocio_config"):
+                options["ocio_config"] = latest.space[1]
+        files = _output_paths(record.layout, path, record.levels, options.get("faces"))
+        preview = step.target(variables, "preview", self.variables) if step.params["preview"] else None
+        self.targets += [(f, step.params["no_clobber"]) for f in [*files, *([preview] if preview else [])]]
+        if self.mode == "plan":
+            _check_output_settings(path, options)
+            files = [*files, *([preview] if preview else [])]
+        else:
+            files = self._write_env(step, latest.env, path, preview, options)
+        self.written.extend(files)
+        record.files.extend(files)
+
+    def _write_env(self, step: Write, env, path: str, preview: str | None, options) -> list[str]:
+        targets = [path, *([preview] if preview else [])]
+        if step.params["makedirs"]:
+            for directory in {os.path.dirname(os.path.abspath(f)) for f in targets}:
+                try:
+                    os.makedirs(directory, exist_ok=True)
+                except OSError as exc:  # a regular file on the way, /proc, no permission
+                    raise ImageIOError(f"cannot write {path}: cannot make folder {directory}: "
+                                       f"{exc.strerror or exc}") from None  # fmt: skip
+        notes: list[str] = []
+        files = io.write(env, path, warnings=notes, **options)
+        self._warn(notes)
+        if preview is not None:
+            files.append(_write_preview(env, preview))
+        log.info("wrote %s", ", ".join(files))
+        return files
+
+
+def _written_later(steps: list[Step], index: int) -> bool:
+    for step in steps[index:]:
+        if isinstance(step, Write):
+            return True
+        if isinstance(step, (Resample, Read)):
+            return False
+    return False
+
+
+def _check_output_settings(path: str, options: dict[str, Any]) -> None:
+    """Fail before any pixel on a bad bit depth, compression or output colour space."""
+    from ..io.encode import plan_output
+
+    plan_output(path, "float", {}, options.get("output_colorspace"), options.get("bit_depth"),
+                options.get("ocio_config"), options.get("compression"))  # fmt: skip
+
+
+def _write_preview(env, path: str) -> str:
+    """A tone-mapped 8-bit picture of ``env`` at ``path`` (a write step's ``preview``)."""
+    from ..io.picture import write_picture
+    from ..views.preview import preview_picture
+
+    return write_picture(preview_picture(env), path)
+
+
+def _output_paths(layout: str, path: str, levels: int, faces=None) -> list[str]:
+    return io.output_paths(layout, path, levels, faces=faces)
+
+
+def _apply_exposure(env, stops: float):
+    from ..color.ocio import apply_exposure
+    from ..envmap import map_levels
+
+    return map_levels(env, lambda pixels: apply_exposure(pixels, stops))
+
+
+def _apply_colorspace(env, dst: str, src: str | None, config: str | None):
+    """``env`` converted by OCIO from ``src`` (default: its ``oiio:ColorSpace``) to ``dst``."""
+    from ..color.ocio import (
+        colorspace_from_metadata,
+        config_for,
+        convert_keeping_nonfinite,
+        metadata_name,
+        resolve_colorspace,
+    )
+    from ..envmap import map_levels
+
+    ocio = config_for(config)
+    if src is None:
+        src = colorspace_from_metadata(env.metadata.get("oiio:ColorSpace"), ocio)
+    if not src:
+        raise UsageError("colorspace: the input's colour space is unknown; give it (--from)")
+    src, dst = resolve_colorspace(ocio, src), resolve_colorspace(ocio, dst)
+    metadata = {**env.metadata, "oiio:ColorSpace": metadata_name(ocio, dst)}
+    metadata.pop("chromaticities", None)
+    changed = map_levels(env, lambda px: convert_keeping_nonfinite(px, src, dst, ocio))
+    return replace(changed, metadata=metadata)

@@ -1,0 +1,235 @@
+"""Worker processes for ``batch -j N``: one job per worker at a time, deaths and interruptions
+contained.
+
+* Each worker is a ``spawn``-ed process that receives one job at a time over a pipe and
+  sends back its record (:func:`envconv.engine.batch.run_job`, which never raises for a bad input).
+  Nothing is queued ahead in a worker, so an interruption has nothing to drain.
+* A worker that dies (killed by the OOM killer, a codec crash) costs only the job it was
+  running: that job is run again once on a fresh worker; if that worker dies too the job
+  fails with the cause ("worker died (killed by SIGKILL)"). The other jobs go on. Every death
+  is listed in the returned events (and so in the batch report).
+* SIGINT/SIGTERM in this process (:mod:`envconv.engine.interrupt`) stops handing out jobs, sends
+  SIGTERM to the workers (which remove their temporary files and exit; they ignore SIGINT,
+  so the terminal's Ctrl-C reaches them only through this process), kills any that have not
+  gone after :data:`STOP_WAIT` seconds, removes their temporary files, and re-raises.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import signal
+from collections import deque
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+__all__ = ["run_pool", "STOP_WAIT"]
+
+log = logging.getLogger(__name__)
+
+#: Seconds interrupted workers get to remove their temporary files before they are killed.
+STOP_WAIT = 0.3
+
+
+def _worker_main(conn, call, init) -> None:
+    """A worker: ``init()``, then run ``call(job)`` for each (index, job) received and send
+    back (index, record)."""
+    from .interrupt import install
+
+    install(sigint=False, quiet=True)
+    init()
+    try:
+        while True:
+            try:
+                message = conn.recv()
+            except (EOFError, OSError):
+                return
+            if message is None:
+                return
+            index, job = message
+            conn.send((index, call(job)))
+    except KeyboardInterrupt:  # SIGTERM from the parent: the writes have removed their temps
+        os._exit(128 + signal.SIGTERM)
+
+
+@dataclass
+class _Worker:
+    process: Any
+    conn: Any
+    index: int | None = None
+
+
+def _cause(exitcode: int | None) -> str:
+    if exitcode is not None and exitcode < 0:
+        try:
+            return f"killed by {signal.Signals(-exitcode).name}"
+        except ValueError:
+            return f"killed by signal {-exitcode}"
+    return f"exit status {exitcode}"
+
+
+class _Pool:
+    def __init__(self, jobs, workers: int, finish, call, init, failed, outputs) -> None:
+        import multiprocessing
+
+        # A forked child would inherit the parent's libraries' thread pools half-copied.
+        self.context = multiprocessing.get_context("spawn")
+        self.jobs, self.call, self.init = jobs, call, init
+        self.finish, self.failed, self.outputs = finish, failed, outputs
+        self.pending: deque[int] = deque(range(len(jobs)))
+        self.attempts = [0] * len(jobs)
+        self.notes: dict[int, str] = {}
+        self.events: list[str] = []
+        self.workers = [self._start() for _ in range(min(workers, len(jobs)))]
+
+    def _start(self) -> _Worker:
+        mine, theirs = self.context.Pipe()
+        process = self.context.Process(target=_worker_main, args=(theirs, self.call, self.init),
+                                       name="envconv-worker", daemon=True)  # fmt: skip
+        # SIGINT stays blocked in the new worker until it ignores it (envconv.engine.interrupt), so a
+        # Ctrl-C while it starts reaches only this process.
+        mask = getattr(signal, "pthread_sigmask", None)
+        blocked = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask else None
+        try:
+            process.start()
+        finally:
+            if mask:
+                mask(signal.SIG_SETMASK, blocked)
+        theirs.close()
+        worker = _Worker(process, mine)
+        self._dispatch(worker)
+        return worker
+
+    def _dispatch(self, worker: _Worker) -> None:
+        worker.index = None
+        if not self.pending:
+            return
+        index = self.pending.popleft()
+        try:
+            worker.conn.send((index, self.jobs[index]))
+        except OSError:  # died before it took the job: the job has not run
+            self.pending.appendleft(index)
+            return
+        worker.index = index
+        self.attempts[index] += 1
+
+    def run(self) -> list[str]:
+        from multiprocessing.connection import wait
+
+        while any(w.index is not None for w in self.workers):
+            busy = [w for w in self.workers if w.index is not None]
+            ready = set(wait([w.conn for w in busy] + [w.process.sentinel for w in busy]))
+            for worker in busy:
+                if worker.conn in ready or worker.process.sentinel in ready:
+                    self._collect(worker)
+        self._close()
+        return self.events
+
+    def _collect(self, worker: _Worker) -> None:
+        try:
+            index, record = worker.conn.recv()
+        except (EOFError, OSError):
+            self._died(worker)
+            return
+        if index in self.notes:
+            record = {**record, "note": self.notes[index]}
+        self.finish(index, record)
+        self._dispatch(worker)
+
+    def _died(self, worker: _Worker) -> None:
+        """Replace a dead worker; run its job once more, or fail it after a second death."""
+        worker.process.join(1.0)
+        cause = _cause(worker.process.exitcode)
+        worker.conn.close()
+        index, name = worker.index, None
+        if index is not None:
+            name = self.jobs[index].name
+            if self.attempts[index] < 2:
+                self.pending.appendleft(index)
+                self.notes[index] = f"worker died ({cause}); run again on a fresh worker"
+            else:
+                self.finish(index, self.failed(self.jobs[index], f"worker died twice ({cause})"))
+        event = f"worker {worker.process.pid} died ({cause})" + (f" running {name}" if name else "")
+        log.warning("%s", event)
+        self.events.append(event)
+        self.workers.remove(worker)
+        if self.pending:
+            self.workers.append(self._start())
+
+    def _close(self) -> None:
+        for worker in self.workers:
+            try:
+                worker.conn.send(None)
+            except OSError:
+                pass
+        for worker in self.workers:
+            worker.process.join(5)
+            if worker.process.is_alive():
+                worker.process.kill()
+
+    def stop(self) -> None:
+        """Interrupted: SIGTERM every worker, kill those still there after STOP_WAIT, and
+        remove the temporary files of the jobs that were running."""
+        import time
+
+        from ..io.temps import clean_stale
+
+        for worker in self.workers:
+            if worker.process.is_alive():
+                worker.process.terminate()
+        deadline = time.monotonic() + STOP_WAIT
+        for worker in self.workers:
+            worker.process.join(max(0.0, deadline - time.monotonic()))
+            if worker.process.is_alive():
+                worker.process.kill()
+                worker.process.join(0.2)
+            self._drain(worker)
+        for folder in self._folders():
+            clean_stale(folder)
+
+    def _drain(self, worker: _Worker) -> None:
+        """Take the record a stopped worker sent before it stopped: that job did finish."""
+        try:
+            if worker.index is not None and worker.conn.poll():
+                index, record = worker.conn.recv()
+                self.finish(index, record)
+                worker.index = None
+        except (EOFError, OSError, ValueError):
+            pass
+
+    def _folders(self) -> set[str]:
+        folders = set()
+        for worker in self.workers:
+            if worker.index is not None:
+                try:
+                    outputs = self.outputs(self.jobs[worker.index])
+                except Exception:  # a job without a plannable output: nothing to clean
+                    continue
+                folders.update(os.path.dirname(p) for p in outputs)
+        return folders
+
+
+def run_pool(
+    jobs: Sequence[Any],
+    workers: int,
+    finish: Callable[[int, dict[str, Any]], None],
+    call: Callable[[Any], dict[str, Any]],
+    init: Callable[[], None],
+    failed: Callable[[Any, str], dict[str, Any]],
+    outputs: Callable[[Any], list[str]],
+) -> list[str]:
+    """Run ``call(job)`` for every job on ``workers`` processes and ``finish(index, record)``
+    as each ends; returns the events (worker deaths) for the report.
+
+    ``call`` and ``init`` (run once in each worker) must be picklable (module-level functions
+    or partials of them). ``failed(job, reason)`` makes the record of a job whose worker died
+    twice; ``outputs(job)`` names a job's output files, whose folders are cleaned of the
+    temporary files of workers killed on an interruption (KeyboardInterrupt: re-raised).
+    """
+    pool = _Pool(jobs, workers, finish, call, init, failed, outputs)
+    try:
+        return pool.run()
+    except BaseException:
+        pool.stop()
+        raise
