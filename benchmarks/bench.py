@@ -78,7 +78,9 @@ def bench_kernel(samples=(1, 2, 4, "auto"), repeats: int = 3) -> None:
             print(f"kernel latlong 4096x2048 -> cube-vcross 1024, S=auto: {best * 1e3:7.1f} ms")
             continue
         rate = face_pixels * s * s / best / 1e6
-        print(f"kernel latlong 4096x2048 -> cube-vcross 1024, S={s}: {best * 1e3:7.1f} ms, {rate:6.1f} M supersamples/s (face pixels only)")
+        print(
+            f"kernel latlong 4096x2048 -> cube-vcross 1024, S={s}: {best * 1e3:7.1f} ms, {rate:6.1f} M supersamples/s (face pixels only)"
+        )
 
 
 def _run(cmd: list[str]) -> tuple[float, float]:
@@ -116,7 +118,9 @@ def bench_e2e(runs: int = 6) -> None:
             _run(cmd)  # first run: may compile
             times = [_run(cmd)[0] for _ in range(runs)]
             peak = resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
-            print(f"e2e {label}: median {statistics.median(times):.3f} s, best {min(times):.3f} s over {runs} runs (peak RSS of any child so far {peak:.0f} MB)")
+            print(
+                f"e2e {label}: median {statistics.median(times):.3f} s, best {min(times):.3f} s over {runs} runs (peak RSS of any child so far {peak:.0f} MB)"
+            )
         start = time.perf_counter()
         subprocess.run([sys.executable, "-c", "import envconv.cli"], check=True)
         print(f"import envconv.cli: {time.perf_counter() - start:.3f} s (process start included)")
@@ -157,7 +161,9 @@ def bench_versus(other: str, runs: int = 12) -> None:
                 times[key].append(run(*key))
     for (tree, case), values in times.items():
         label = ROOT if tree == "this" else other
-        print(f"versus {case:4s} {label}: median {statistics.median(values):.3f} s, best {min(values):.3f} s over {runs} runs")
+        print(
+            f"versus {case:4s} {label}: median {statistics.median(values):.3f} s, best {min(values):.3f} s over {runs} runs"
+        )
 
 
 # --- batch (issue 5) ------------------------------------------------------------------------
@@ -177,7 +183,12 @@ def bench_batch(files: int = 20) -> None:
                 out = os.path.join(tmp, f"o{jobs}{label}")
                 steps = ["resample", "--to", "cube-vcross", "--size", "512"]
                 if not write:
-                    steps += ["write", os.path.join(out, "{stem}_{layout}.exr"), "--compression", "none"]
+                    steps += [
+                        "write",
+                        os.path.join(out, "{stem}_{layout}.exr"),
+                        "--compression",
+                        "none",
+                    ]
                 else:
                     write = ["--out", os.path.join(out, "{stem}_{layout}.exr")]
                 cmd = [exe, "batch", inputs, *write, "-j", str(jobs), *steps]
@@ -190,7 +201,9 @@ def bench_batch(files: int = 20) -> None:
                     raise SystemExit(f"failed: {' '.join(cmd)}\n{proc.stderr}")
                 output = (proc.stdout + proc.stderr).splitlines()
                 summary = next(line for line in output if " files: " in line)
-                print(f"batch {files} x latlong 2048x1024 -> cube-vcross 512, -j {jobs}, {label}: {summary} | process {wall / files:.3f} s per file")
+                print(
+                    f"batch {files} x latlong 2048x1024 -> cube-vcross 512, -j {jobs}, {label}: {summary} | process {wall / files:.3f} s per file"
+                )
 
 
 # --- mip chains (issue 3) -------------------------------------------------------------------
@@ -216,7 +229,9 @@ def bench_mips(repeats: int = 7) -> None:
             envconv.convert(src, "cube-vcross", size=512, mips=mips, samples=s)
             times[mips].append(time.perf_counter() - start)
     level0, chain = statistics.median(times[None]), statistics.median(times[True])
-    print(f"mips latlong 2048x1024 -> cube-vcross 512, S={s}: level 0 {level0 * 1e3:.0f} ms, full chain (12 levels) {chain * 1e3:.0f} ms, ratio {chain / level0:.2f}")
+    print(
+        f"mips latlong 2048x1024 -> cube-vcross 512, S={s}: level 0 {level0 * 1e3:.0f} ms, full chain (12 levels) {chain * 1e3:.0f} ms, ratio {chain / level0:.2f}"
+    )
 
 
 def _run_cpu(cmd: list[str]) -> tuple[float, float]:
@@ -388,7 +403,9 @@ def main(argv: list[str]) -> None:
     if which[0] in ("-h", "--help"):
         print(__doc__)
         return
-    print(f"envconv {envconv.__version__} ({os.path.dirname(envconv.__file__)}), numpy {np.__version__}, {os.cpu_count()} cores")
+    print(
+        f"envconv {envconv.__version__} ({os.path.dirname(envconv.__file__)}), numpy {np.__version__}, {os.cpu_count()} cores"
+    )
     if which[0] == "targets":
         import targets
 

@@ -24,7 +24,9 @@ __all__ = [
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLES = os.path.join(ROOT, "examples", "data")
 
-_WHERE = "import envconv, os; print(os.path.dirname(os.path.dirname(os.path.abspath(envconv.__file__))))"
+_WHERE = (
+    "import envconv, os; print(os.path.dirname(os.path.dirname(os.path.abspath(envconv.__file__))))"
+)
 
 
 @dataclass
@@ -40,11 +42,17 @@ class Build:
         """The build ``python`` imports, with its package's bytecode compiled (as an install does)."""
         python = os.path.abspath(python)  # not realpath: a venv's python is a symlink
         with tempfile.TemporaryDirectory() as scratch:
-            proc = subprocess.run([python, "-c", _WHERE], cwd=scratch, capture_output=True, text=True)
+            proc = subprocess.run(
+                [python, "-c", _WHERE], cwd=scratch, capture_output=True, text=True
+            )
         if proc.returncode:
-            raise SystemExit(f"{python} cannot import envconv: {proc.stderr.strip().splitlines()[-1:]}")
+            raise SystemExit(
+                f"{python} cannot import envconv: {proc.stderr.strip().splitlines()[-1:]}"
+            )
         source = proc.stdout.strip()
-        subprocess.run([python, "-m", "compileall", "-q", os.path.join(source, "envconv")], check=True)
+        subprocess.run(
+            [python, "-m", "compileall", "-q", os.path.join(source, "envconv")], check=True
+        )
         return cls(name, python, source)
 
     @property
@@ -64,7 +72,10 @@ class Table:
 
     def markdown(self) -> str:
         names = ["baseline", "this", "peer"]
-        lines = ["| what | " + " | ".join(names) + " | target | met |", "|---" * (len(names) + 3) + "|"]
+        lines = [
+            "| what | " + " | ".join(names) + " | target | met |",
+            "|---" * (len(names) + 3) + "|",
+        ]
         for what, figures, target, met in self.rows:
             cells = [figures.get(name, "") for name in names]
             lines.append(f"| {what} | " + " | ".join(cells) + f" | {target} | {met} |")
@@ -89,7 +100,9 @@ def run_logged(cmd: list[str], cwd: str, log: str, env: dict | None = None) -> t
     """Run ``cmd`` with its output in the file ``log``; return (wall seconds, exit code)."""
     start = time.perf_counter()
     with open(log, "w") as out:
-        code = subprocess.run(cmd, cwd=cwd, env=env, stdout=out, stderr=subprocess.STDOUT).returncode
+        code = subprocess.run(
+            cmd, cwd=cwd, env=env, stdout=out, stderr=subprocess.STDOUT
+        ).returncode
     return time.perf_counter() - start, code
 
 
@@ -106,7 +119,10 @@ def clone_head(source: str, dest: str) -> str:
     dirty = subprocess.run(["git", "-C", source, "status", "--porcelain", "--untracked-files=no"],
                            capture_output=True, text=True, check=True).stdout.strip()  # fmt: skip
     if dirty:
-        print(f"warning: {source} has uncommitted changes; measuring its HEAD {head[:10]}", file=sys.stderr)
+        print(
+            f"warning: {source} has uncommitted changes; measuring its HEAD {head[:10]}",
+            file=sys.stderr,
+        )
     subprocess.run(["git", "clone", "--quiet", "--no-checkout", source, dest], check=True)
     subprocess.run(["git", "-C", dest, "checkout", "--quiet", head], check=True)
     return head

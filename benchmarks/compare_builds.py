@@ -89,7 +89,9 @@ def dump(path: str, input_path: str, source_size: int, size: int, sources: str |
             "sources": sources, "errors": errors}  # fmt: skip
     np.savez_compressed(path, meta=np.array(json.dumps(meta)), **arrays)
     cases = len(maps) * len(maps) * len(OPTION_SETS)
-    print(f"{cases} cases ({len(errors)} refused by the library) in {time.perf_counter() - start:.1f} s -> {path}")
+    print(
+        f"{cases} cases ({len(errors)} refused by the library) in {time.perf_counter() - start:.1f} s -> {path}"
+    )
 
 
 def _relative(a: np.ndarray, b: np.ndarray, floor: float) -> tuple[float, float]:
@@ -110,7 +112,9 @@ def _cases(data) -> dict[str, list[str]]:
     cases: dict[str, list[str]] = {}
     for key in data.files:
         if key != "meta":
-            cases.setdefault(key.rsplit("/", 1)[0] if not key.startswith("src/") else key, []).append(key)
+            cases.setdefault(
+                key.rsplit("/", 1)[0] if not key.startswith("src/") else key, []
+            ).append(key)
     return cases
 
 
@@ -118,18 +122,30 @@ def compare(path_a: str, path_b: str, floor: float, tolerance: float, show_all: 
     """Print the differences of dump ``path_a`` from dump ``path_b``; True when all agree."""
     with np.load(path_a) as a, np.load(path_b) as b:
         meta_a, meta_b = json.loads(str(a["meta"])), json.loads(str(b["meta"]))
-        print(f"A: {path_a} (envconv at {meta_a['envconv']})\nB: {path_b} (envconv at {meta_b['envconv']})")
+        print(
+            f"A: {path_a} (envconv at {meta_a['envconv']})\nB: {path_b} (envconv at {meta_b['envconv']})"
+        )
         cases_a, cases_b = _cases(a), _cases(b)
         results = {}
-        for case in sorted(set(cases_a) | set(cases_b) | set(meta_a["errors"]) | set(meta_b["errors"])):
+        for case in sorted(
+            set(cases_a) | set(cases_b) | set(meta_a["errors"]) | set(meta_b["errors"])
+        ):
             err_a, err_b = meta_a["errors"].get(case), meta_b["errors"].get(case)
             if err_a or err_b:
                 same = bool(err_a) == bool(err_b)
-                results[case] = (0.0 if same else float("inf"), 0.0 if same else float("inf"), f"A: {err_a} | B: {err_b}")
+                results[case] = (
+                    0.0 if same else float("inf"),
+                    0.0 if same else float("inf"),
+                    f"A: {err_a} | B: {err_b}",
+                )
                 continue
             keys_a, keys_b = sorted(cases_a.get(case, [])), sorted(cases_b.get(case, []))
             if keys_a != keys_b:
-                results[case] = (float("inf"), float("inf"), f"levels differ: {len(keys_a)} vs {len(keys_b)}")
+                results[case] = (
+                    float("inf"),
+                    float("inf"),
+                    f"levels differ: {len(keys_a)} vs {len(keys_b)}",
+                )
                 continue
             worst = [_relative(a[k], b[k], floor) for k in keys_a]
             shapes = [f"{a[k].shape} vs {b[k].shape}" for k in keys_a if a[k].shape != b[k].shape]
@@ -141,9 +157,13 @@ def compare(path_a: str, path_b: str, floor: float, tolerance: float, show_all: 
             print(f"{case:50s} rel {rel:.3g}  abs {absolute:.3g}  {note}")
     groups: dict[str, list[float]] = {}
     for case, (rel, _, _) in results.items():
-        groups.setdefault("sources" if case.startswith("src/") else case.rsplit("/", 1)[1], []).append(rel)
+        groups.setdefault(
+            "sources" if case.startswith("src/") else case.rsplit("/", 1)[1], []
+        ).append(rel)
     for group, values in groups.items():
-        print(f"{group:12s} {len(values):4d} cases, worst rel {max(values):.3g}, {sum(not v <= tolerance for v in values)} over {tolerance:g}")
+        print(
+            f"{group:12s} {len(values):4d} cases, worst rel {max(values):.3g}, {sum(not v <= tolerance for v in values)} over {tolerance:g}"
+        )
     overall = max(r[0] for r in results.values())
     agree = not bad
     print(f"overall: {len(results)} cases, worst rel {overall:.3g} (floor {floor:g}); "
@@ -152,11 +172,15 @@ def compare(path_a: str, path_b: str, floor: float, tolerance: float, show_all: 
 
 
 def main(argv: list[str]) -> int:
-    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser = argparse.ArgumentParser(
+        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter
+    )
     sub = parser.add_subparsers(dest="command", required=True)
     d = sub.add_parser("dump", help="write this build's outputs to an .npz")
     d.add_argument("output")
-    d.add_argument("--input", default=DEFAULT_INPUT, help="a lat-long map (default: venice example)")
+    d.add_argument(
+        "--input", default=DEFAULT_INPUT, help="a lat-long map (default: venice example)"
+    )
     d.add_argument("--source-size", type=int, default=48, help="N of every source layout (48)")
     d.add_argument("--size", type=int, default=32, help="N of every output (32)")
     d.add_argument("--sources", metavar="DUMP.npz", help="take the sources from another dump")

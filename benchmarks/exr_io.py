@@ -41,7 +41,10 @@ def _write_oiio(path: str, pixels: np.ndarray, pixel_type: str, compression: str
 
 
 def _write_openexr(path: str, pixels: np.ndarray, dtype, compression: str) -> None:
-    header = {"compression": getattr(OpenEXR, _COMPRESSIONS[compression]), "type": OpenEXR.scanlineimage}
+    header = {
+        "compression": getattr(OpenEXR, _COMPRESSIONS[compression]),
+        "type": OpenEXR.scanlineimage,
+    }
     with OpenEXR.File(header, {"RGB": np.ascontiguousarray(pixels, dtype)}) as exr:
         exr.write(path)
 

@@ -37,7 +37,9 @@ def _cross(source: np.ndarray, face: int) -> np.ndarray:
         near = source[: face * step : step, x0 : x0 + face * step : step]
         far = source[1 : face * step + 1 : step, x0 + 1 : x0 + face * step + 1 : step]
         h, w = min(near.shape[0], far.shape[0]), min(near.shape[1], far.shape[1])
-        frac = ((np.arange(w, dtype=np.float32) * np.float32(0.618034)) % 1)[:, None]  # as a bilinear tap's
+        frac = ((np.arange(w, dtype=np.float32) * np.float32(0.618034)) % 1)[
+            :, None
+        ]  # as a bilinear tap's
         cell = cross[row * face : row * face + h, col * face : col * face + w]
         np.multiply(near[:h, :w], 1 - frac, out=cell)
         cell += frac * far[:h, :w]
@@ -82,7 +84,11 @@ def main(argv: list[str]) -> None:
     if len(argv) == 6 and argv[1] != "--each":
         pairs, (face, compression, writer), threads = [argv[1:3]], argv[3:6], os.cpu_count() or 1
     elif len(argv) >= 7 and argv[1] == "--each" and len(argv) % 2 == 1:
-        pairs, (face, compression, writer), threads = list(zip(argv[5::2], argv[6::2], strict=True)), argv[2:5], 1
+        pairs, (face, compression, writer), threads = (
+            list(zip(argv[5::2], argv[6::2], strict=True)),
+            argv[2:5],
+            1,
+        )
     else:
         sys.exit(usage)
     if writer not in ("oiio", "openexr"):

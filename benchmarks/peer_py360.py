@@ -32,7 +32,9 @@ def main(argv: list[str]) -> None:
         sys.exit(f"cannot read {src}: {oiio.geterror()}")
     pixels = image.read_image(0, 0, 0, 3, "float")
     image.close()
-    cross = np.ascontiguousarray(py360convert.e2c(pixels, face_w=face, mode="bilinear", cube_format="dice"))
+    cross = np.ascontiguousarray(
+        py360convert.e2c(pixels, face_w=face, mode="bilinear", cube_format="dice")
+    )
     spec = oiio.ImageSpec(cross.shape[1], cross.shape[0], cross.shape[2], "float")
     spec.attribute("compression", compression)
     out = oiio.ImageOutput.create(dst)

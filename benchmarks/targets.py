@@ -95,10 +95,17 @@ def row_import(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
     for build in builds:
         base = median(times[build.name, "base"])
         cost = {k: median(times[build.name, k]) - base for k in ("import", "ready")}
-        print(f"import {build.name}: numpy+click {base:.3f} s; on top: import {cost['import']:.3f} s, ready {cost['ready']:.3f} s (median of {runs})")
+        print(
+            f"import {build.name}: numpy+click {base:.3f} s; on top: import {cost['import']:.3f} s, ready {cost['ready']:.3f} s (median of {runs})"
+        )
         figures[build.name] = f"{cost['import']:.3f} s (ready {cost['ready']:.3f} s)"
         met = max(cost.values()) <= 0.15 if build.name == "this" else met
-    table.add("`import envconv, envconv.cli` over `import numpy, click`", "≤ 0.15 s, no bypass", met, **figures)
+    table.add(
+        "`import envconv, envconv.cli` over `import numpy, click`",
+        "≤ 0.15 s, no bypass",
+        met,
+        **figures,
+    )
 
 
 def row_kernel(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
@@ -129,12 +136,16 @@ def row_kernel(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
             figures = {}
             for name, values in times.items():
                 rate = 6 * 1024 * 1024 * s * s / min(values) / 1e6
-                print(f"kernel S={s} {name}: median {median(values) * 1e3:.1f} ms, best {min(values) * 1e3:.1f} ms, {rate:.1f} M supersamples/s (face pixels, best)")
+                print(
+                    f"kernel S={s} {name}: median {median(values) * 1e3:.1f} ms, best {min(values) * 1e3:.1f} ms, {rate:.1f} M supersamples/s (face pixels, best)"
+                )
                 figures[name] = f"{median(values) * 1e3:.0f} ms"
             speedup = median(times.get("baseline", [])) / median(times["this"])
             figures["this"] += f" ({speedup:.2f}× baseline)" if "baseline" in times else ""
             met = speedup >= 2 if "baseline" in times else None
-            table.add(f"kernel, lat-long 4096×2048 → cube 1024, S = {s}", "≥ 2× baseline", met, **figures)
+            table.add(
+                f"kernel, lat-long 4096×2048 → cube 1024, S = {s}", "≥ 2× baseline", met, **figures
+            )
     finally:
         for worker in workers.values():
             worker.stdin.close()
@@ -159,9 +170,11 @@ def row_oneshot(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
         for (name, compression), values in times.items():
             out = os.path.join(tmp, f"oneshot-{name}-{compression}.exr")
             if name.startswith("floor-"):
-                cmd = [sys.executable, FLOOR, src, out, "512", compression, name[len("floor-"):]]
+                cmd = [sys.executable, FLOOR, src, out, "512", compression, name[len("floor-") :]]
             else:
-                cmd = oneshot_cmd(next(b for b in builds if b.name == name), src, out, 512, compression)
+                cmd = oneshot_cmd(
+                    next(b for b in builds if b.name == name), src, out, 512, compression
+                )
             elapsed = spawn(cmd, tmp)[0]
             if round_:
                 values.append(elapsed)
@@ -169,19 +182,27 @@ def row_oneshot(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
     for writer in FLOOR_WRITERS:
         for compression in ("zip", "none"):
             value = median(times[f"floor-{writer}", compression])
-            print(f"oneshot floor, {writer} reads and writes, {compression}, no conversion: median {value:.3f} s; ÷ peer zip {value / peer:.2f}")
+            print(
+                f"oneshot floor, {writer} reads and writes, {compression}, no conversion: median {value:.3f} s; ÷ peer zip {value / peer:.2f}"
+            )
     for compression, target in (("zip", 0.5), ("none", 0.32)):
         peer_same = median(times.get(("peer", compression), []))
         figures = {}
         for build in builds:
             value = median(times[build.name, compression])
             other = f", ÷ peer none {value / peer_same:.2f}" if compression == "none" else ""
-            print(f"oneshot {compression} {build.name}: median {value:.3f} s, best {min(times[build.name, compression]):.3f} s over {runs} runs; ÷ peer zip {value / peer:.2f}{other}")
+            print(
+                f"oneshot {compression} {build.name}: median {value:.3f} s, best {min(times[build.name, compression]):.3f} s over {runs} runs; ÷ peer zip {value / peer:.2f}{other}"
+            )
             figures[build.name] = f"{value:.3f} s ({value / peer:.2f})"
         if "peer" in figures:
-            figures["peer"] = f"{peer:.3f} s" + (f" (none: {peer_same:.3f} s)" if compression == "none" else "")
+            figures["peer"] = f"{peer:.3f} s" + (
+                f" (none: {peer_same:.3f} s)" if compression == "none" else ""
+            )
         met = median(times["this", compression]) / peer <= target if not math.isnan(peer) else None
-        what = "one shot 2048×1024 float EXR → cube-vcross 512, " + ("zip" if compression == "zip" else "`--compression none`")
+        what = "one shot 2048×1024 float EXR → cube-vcross 512, " + (
+            "zip" if compression == "zip" else "`--compression none`"
+        )
         table.add(what + ", ÷ py360convert + OpenCV one shot (zip)", f"≤ {target}", met, **figures)
 
 
@@ -218,7 +239,10 @@ def row_batch(builds: list[Build], runs: int, files: int, tmp: str, table: Table
             out = os.path.join(tmp, f"batch-{build.name}")
             remove(out)
             if build.source is None:  # the peer's one shot, three times a round
-                per_file = [spawn(oneshot_cmd(build, src, out + ".exr", 512, "zip"), tmp)[0] for _ in range(3)]
+                per_file = [
+                    spawn(oneshot_cmd(build, src, out + ".exr", 512, "zip"), tmp)[0]
+                    for _ in range(3)
+                ]
             else:
                 cmd = [build.envconv, "batch", inputs, "--out", os.path.join(out, "{stem}_{layout}.exr"),
                        "-j", "2", "resample", "--to", "cube-vcross", "--size", "512"]  # fmt: skip
@@ -227,14 +251,23 @@ def row_batch(builds: list[Build], runs: int, files: int, tmp: str, table: Table
                 times[build.name].extend(per_file)
     peer = median(times.get("peer", []))
     for writer, values in floors.items():
-        print(f"batch floor, {writer} reads and writes, zip, no conversion, 2 processes: {median(values):.3f} s per file; ÷ peer one shot {median(values) / peer:.2f}")
+        print(
+            f"batch floor, {writer} reads and writes, zip, no conversion, 2 processes: {median(values):.3f} s per file; ÷ peer one shot {median(values) / peer:.2f}"
+        )
     figures = {"peer": f"{peer:.3f} s one shot"} if not math.isnan(peer) else {}
     for name, values in times.items():
         if name != "peer":
-            print(f"batch {files} files -j 2 zip {name}: {median(values):.3f} s per file (median of {runs}); ÷ peer one shot {median(values) / peer:.2f}")
+            print(
+                f"batch {files} files -j 2 zip {name}: {median(values):.3f} s per file (median of {runs}); ÷ peer one shot {median(values) / peer:.2f}"
+            )
             figures[name] = f"{median(values):.3f} s/file ({median(values) / peer:.2f})"
     met = median(times["this"]) / peer <= 0.16 if not math.isnan(peer) else None
-    table.add(f"batch of {files}, `-j 2`, zip, per file ÷ py360convert + OpenCV one shot", "≤ 0.16", met, **figures)
+    table.add(
+        f"batch of {files}, `-j 2`, zip, per file ÷ py360convert + OpenCV one shot",
+        "≤ 0.16",
+        met,
+        **figures,
+    )
 
 
 def row_big(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
@@ -251,13 +284,24 @@ def row_big(builds: list[Build], runs: int, tmp: str, table: Table) -> None:
     for name, values in results.items():
         best, peak = min(v[0] for v in values), max(v[1] for v in values)
         ratio = peak * 2**20 / pixels
-        print(f"big 16384x8192 -> cube-vcross 4096 none {name}: best {best:.1f} s of {runs}, peak RSS {peak * 2**20 / 1e9:.2f} GB = {ratio:.2f} × (in + out)")
+        print(
+            f"big 16384x8192 -> cube-vcross 4096 none {name}: best {best:.1f} s of {runs}, peak RSS {peak * 2**20 / 1e9:.2f} GB = {ratio:.2f} × (in + out)"
+        )
         figures[name] = f"{best:.1f} s, {ratio:.2f} × (in + out)"
     this = results["this"]
     small = max(v[1] for v in this) * 2**20 / pixels <= 1.25
-    faster = min(v[0] for v in this) < min(v[0] for v in results["baseline"]) if "baseline" in results else None
+    faster = (
+        min(v[0] for v in this) < min(v[0] for v in results["baseline"])
+        if "baseline" in results
+        else None
+    )
     met = False if not small else faster  # None (unjudged) without a baseline
-    table.add("16384×8192 float lat-long → cube-vcross 4096, uncompressed", "faster, ≤ 1.25 × (in + out)", met, **figures)
+    table.add(
+        "16384×8192 float lat-long → cube-vcross 4096, uncompressed",
+        "faster, ≤ 1.25 × (in + out)",
+        met,
+        **figures,
+    )
     remove(src)
 
 
@@ -270,16 +314,27 @@ def row_install(builds: list[Build], tmp: str, table: Table) -> None:
         venv = os.path.join(where, "venv")
         subprocess.run([build.python, "-m", "venv", venv], check=True)
         python = os.path.join(venv, "bin", "python")
-        pip, code = run_logged([python, "-m", "pip", "install", os.path.join(where, "src")], where, os.path.join(where, "pip.log"))
+        pip, code = run_logged(
+            [python, "-m", "pip", "install", os.path.join(where, "src")],
+            where,
+            os.path.join(where, "pip.log"),
+        )
         if code:
             raise SystemExit(f"pip install failed for {build.name}; see {where}/pip.log")
         fresh = Build(build.name, python, build.source)
-        first, second = (spawn(oneshot_cmd(fresh, src, os.path.join(where, "out.exr"), 512, "zip"), tmp)[0] for _ in range(2))
-        print(f"install {build.name} ({head[:10]}): pip install {pip:.0f} s, first one shot {first:.2f} s, second {second:.2f} s")
+        first, second = (
+            spawn(oneshot_cmd(fresh, src, os.path.join(where, "out.exr"), 512, "zip"), tmp)[0]
+            for _ in range(2)
+        )
+        print(
+            f"install {build.name} ({head[:10]}): pip install {pip:.0f} s, first one shot {first:.2f} s, second {second:.2f} s"
+        )
         figures[build.name] = f"first {first:.2f} s, second {second:.2f} s"
         met = first <= 1.2 * second if build.name == "this" else met
         remove(where)
-    table.add("first conversion after `pip install .`", "the same as the second (±20%)", met, **figures)
+    table.add(
+        "first conversion after `pip install .`", "the same as the second (±20%)", met, **figures
+    )
 
 
 def row_fresh(builds: list[Build], tmp: str, table: Table) -> None:
@@ -295,7 +350,9 @@ def row_fresh(builds: list[Build], tmp: str, table: Table) -> None:
         if code:
             with open(log) as f:
                 print("".join(f.readlines()[-15:]), file=sys.stderr)
-        figures[build.name] = f"{elapsed // 60:.0f} min {elapsed % 60:.0f} s" + ("" if code == 0 else " (failed)")
+        figures[build.name] = f"{elapsed // 60:.0f} min {elapsed % 60:.0f} s" + (
+            "" if code == 0 else " (failed)"
+        )
         met = elapsed <= 180 and code == 0 if build.name == "this" else met
         remove(where)
     table.add("`./run-tests.sh` on a fresh clone, build included", "≤ 3 min", met, **figures)
@@ -306,22 +363,33 @@ def main(argv: list[str]) -> None:
                                      formatter_class=argparse.RawDescriptionHelpFormatter)  # fmt: skip
     parser.add_argument("--baseline", metavar="PYTHON", help="python of the baseline build's venv")
     parser.add_argument("--peer", metavar="PYTHON", help="python of the py360convert + OpenCV venv")
-    parser.add_argument("--rows", default=",".join(ROWS), help="comma-separated rows (default: all)")
-    parser.add_argument("--runs", type=int, default=10, help="timed rounds of import, kernel, oneshot (10)")
+    parser.add_argument(
+        "--rows", default=",".join(ROWS), help="comma-separated rows (default: all)"
+    )
+    parser.add_argument(
+        "--runs", type=int, default=10, help="timed rounds of import, kernel, oneshot (10)"
+    )
     parser.add_argument("--batch-runs", type=int, default=3, help="timed rounds of batch (3)")
     parser.add_argument("--big-runs", type=int, default=2, help="rounds of big (2)")
     parser.add_argument("--batch-files", type=int, default=20)
-    parser.add_argument("--keep-logs", metavar="DIR", help="scratch directory to use and keep (logs of fresh)")
+    parser.add_argument(
+        "--keep-logs", metavar="DIR", help="scratch directory to use and keep (logs of fresh)"
+    )
     args = parser.parse_args(argv)
     rows = [r.strip() for r in args.rows.split(",") if r.strip()]
     if set(rows) - set(ROWS):
-        parser.error(f"unknown rows {', '.join(sorted(set(rows) - set(ROWS)))} (known: {', '.join(ROWS)})")
+        parser.error(
+            f"unknown rows {', '.join(sorted(set(rows) - set(ROWS)))} (known: {', '.join(ROWS)})"
+        )
     builds = [Build.envconv_build("this", sys.executable)]
     if args.baseline:
         builds.append(Build.envconv_build("baseline", args.baseline))
     peer = [Build("peer", os.path.abspath(args.peer))] if args.peer else []
     for build in builds + peer:
-        print(f"{build.name:8s} {build.python} ({build.source or 'py360convert + OpenCV'})", flush=True)
+        print(
+            f"{build.name:8s} {build.python} ({build.source or 'py360convert + OpenCV'})",
+            flush=True,
+        )
     table, start = Table(), time.perf_counter()
     with tempfile.TemporaryDirectory(prefix="envconv-targets-") as scratch:
         tmp = args.keep_logs or scratch
@@ -330,7 +398,9 @@ def main(argv: list[str]) -> None:
             "import": lambda: row_import(builds, args.runs, tmp, table),
             "kernel": lambda: row_kernel(builds, args.runs, tmp, table),
             "oneshot": lambda: row_oneshot(builds + peer, args.runs, tmp, table),
-            "batch": lambda: row_batch(builds + peer, args.batch_runs, args.batch_files, tmp, table),
+            "batch": lambda: row_batch(
+                builds + peer, args.batch_runs, args.batch_files, tmp, table
+            ),
             "big": lambda: row_big(builds, args.big_runs, tmp, table),
             "install": lambda: row_install(builds, tmp, table),
             "fresh": lambda: row_fresh(builds, tmp, table),
@@ -338,5 +408,7 @@ def main(argv: list[str]) -> None:
         for row in rows:
             steps[row]()
             sys.stdout.flush()
-    print(f"\n{time.perf_counter() - start:.0f} s in all; ratios in brackets are ÷ the peer, or × the baseline for the kernel\n")
+    print(
+        f"\n{time.perf_counter() - start:.0f} s in all; ratios in brackets are ÷ the peer, or × the baseline for the kernel\n"
+    )
     print(table.markdown())

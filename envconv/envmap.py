@@ -80,7 +80,9 @@ class EnvMap:
         if self.valid is not None:
             self.valid = np.ascontiguousarray(self.valid, dtype=np.float32)
             if self.valid.shape != self.pixels.shape[:2]:
-                raise LayoutError(f"valid has shape {self.valid.shape}; expected {self.pixels.shape[:2]}")
+                raise LayoutError(
+                    f"valid has shape {self.valid.shape}; expected {self.pixels.shape[:2]}"
+                )
         self.parts = tuple((str(name), tuple(names)) for name, names in self.parts)
         if self.parts and sum(len(names) for _, names in self.parts) != len(self.channels):
             raise LayoutError(f"parts hold {sum(len(n) for _, n in self.parts)} channels, "

@@ -58,7 +58,9 @@ def main(outdir: Path) -> None:
         # a map mirrored by another tool, read as envconv's: the labels read backwards
         envconv("pattern", str(tmp / "mirrored.exr"), "--to", "latlong", "--size", "256",
                 "--out-convention=-x,y,z")  # fmt: skip
-        envconv("preview", str(tmp / "mirrored.exr"), "-o", str(outdir / "check-sheet-mirrored.png"))
+        envconv(
+            "preview", str(tmp / "mirrored.exr"), "-o", str(outdir / "check-sheet-mirrored.png")
+        )
         # a lat-long written as Blender writes one, seen in Blender's axes
         envconv("pattern", str(tmp / "blender.exr"), "--to", "latlong", "--size", "256",
                 "--out-convention", "blender")  # fmt: skip

@@ -51,7 +51,9 @@ def _tile(source: envconv.EnvMap, name: str) -> np.ndarray:
 
 
 def main(argv: list[str]) -> int:
-    output = argv[1] if len(argv) > 1 else os.path.join(HERE, "..", "docs", "img", "every-layout.png")
+    output = (
+        argv[1] if len(argv) > 1 else os.path.join(HERE, "..", "docs", "img", "every-layout.png")
+    )
     source = envconv.read(SOURCE)
     rows = [[_tile(source, name) for name in names] for names in ROWS]
     widths = [sum(t.shape[1] for t in row) + GAP * (len(row) - 1) for row in rows]

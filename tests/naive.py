@@ -42,16 +42,28 @@ GRIDS = {
         3,
         4,
         1,
-        ((1, 0, 2, False), (0, 1, 1, False), (1, 1, 4, False), (2, 1, 0, False),
-         (1, 2, 3, False), (1, 3, 5, True)),
+        (
+            (1, 0, 2, False),
+            (0, 1, 1, False),
+            (1, 1, 4, False),
+            (2, 1, 0, False),
+            (1, 2, 3, False),
+            (1, 3, 5, True),
+        ),
     ),  # fmt: skip
     "cube-hcross": (
         "cube",
         4,
         3,
         1,
-        ((1, 0, 2, False), (0, 1, 1, False), (1, 1, 4, False), (2, 1, 0, False),
-         (3, 1, 5, False), (1, 2, 3, False)),
+        (
+            (1, 0, 2, False),
+            (0, 1, 1, False),
+            (1, 1, 4, False),
+            (2, 1, 0, False),
+            (3, 1, 5, False),
+            (1, 2, 3, False),
+        ),
     ),  # fmt: skip
     "cube-hstrip": ("cube", 6, 1, 1, _STRIP_H),
     "cube-vstrip": ("cube", 1, 6, 1, _STRIP_V),
@@ -192,9 +204,7 @@ def face_to_dir(family: str, face, a, b) -> np.ndarray:
     if family == "tennisball":
         phi = (0.5 - (a + 1) / 2) * (1.5 * math.pi)
         theta = (0.5 - (b + 1) / 2) * (0.5 * math.pi)
-        c1 = np.stack(
-            [np.sin(phi) * np.cos(theta), np.sin(theta), np.cos(phi) * np.cos(theta)], -1
-        )
+        c1 = np.stack([np.sin(phi) * np.cos(theta), np.sin(theta), np.cos(phi) * np.cos(theta)], -1)
         c2 = np.stack(
             [np.sin(theta), np.sin(phi) * np.cos(theta), -np.cos(phi) * np.cos(theta)], -1
         )
@@ -215,7 +225,9 @@ def face_density(family: str, face, a, b) -> np.ndarray:
         return np.full_like(r2, 4.0)
     if family == "angular":  # α = πR: π sin(πR) / R
         r = np.sqrt(r2)
-        return np.where(r > 1e-12, math.pi * np.sin(math.pi * r) / np.where(r > 0, r, 1), math.pi**2)
+        return np.where(
+            r > 1e-12, math.pi * np.sin(math.pi * r) / np.where(r > 0, r, 1), math.pi**2
+        )
     if family == "paraboloid":
         return 4.0 / (1 + r2) ** 2
     if family == "equal-area":  # 4π over the area-4 square, everywhere

@@ -224,5 +224,7 @@ def test_make_jobs_applies_the_output_policy_across_jobs(tmp_path):
     made = jobs(Resample("latlong", size=4), Write(str(tmp_path / "{stem}_y.exr")))
     with pytest.raises(UsageError, match="no-clobber"):
         jobs(Resample("latlong", size=4), Write(str(tmp_path / "{stem}_y.exr")), no_clobber=True)
-    assert all(s.params["no_clobber"] is False for s in made[0].pipeline.steps if isinstance(s, Write))
+    assert all(
+        s.params["no_clobber"] is False for s in made[0].pipeline.steps if isinstance(s, Write)
+    )
     assert (tmp_path / "b_y.exr").read_bytes() == b"old" and not (tmp_path / "a_y.exr").exists()

@@ -25,7 +25,10 @@ def test_descriptor_output_is_caught_and_logged_at_debug(capfd, caplog):
     assert out == "after\n" and err == ""
     assert caught.lines("a.exr") == ["chunk 3 is bad", "second thing", "through python"]
     assert [r.getMessage() for r in caplog.records] == [
-        "library: chunk 3 is bad", "library: second thing", "library: through python"]
+        "library: chunk 3 is bad",
+        "library: second thing",
+        "library: through python",
+    ]
 
 
 def test_an_error_gets_the_first_new_line_and_keeps_its_type(capfd):
@@ -72,7 +75,9 @@ def test_nested_captures_and_python_warnings(capfd):
 def test_meaningful_lines_drop_prefixes_blanks_and_repeats():
     text = "x.exr: bad\n\n  x.exr: bad  \nWarning: Exception raised\nother\n"
     assert meaningful_lines(text, "x.exr") == ["bad", "Exception raised", "other"]
-    assert meaningful_lines("/d/x.exr: bad\nx.exr: bad\n", "/d/x.exr") == ["bad"]  # as given, or base
+    assert meaningful_lines("/d/x.exr: bad\nx.exr: bad\n", "/d/x.exr") == [
+        "bad"
+    ]  # as given, or base
 
 
 def test_envconv_log_lines_printed_meanwhile_pass_through(capfd):

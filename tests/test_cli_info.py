@@ -71,9 +71,18 @@ def test_info_reports_an_untagged_square_as_unknown_until_from(tmp_path):
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
     assert record["layout"] == "unknown" and record["candidates"] == [
-        "sphere", "angular", "octahedral", "equal-area"]
+        "sphere",
+        "angular",
+        "octahedral",
+        "equal-area",
+    ]
     assert "sphere, angular" in record["reason"] and "--from" in record["reason"]
-    assert (record["width"], record["height"], record["size"], record["mean_radiance"]) == (16, 16, None, None)
+    assert (record["width"], record["height"], record["size"], record["mean_radiance"]) == (
+        16,
+        16,
+        None,
+        None,
+    )
     result = run_cli(["info", path, "--json", "--from", "sphere", "--stats"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
@@ -104,7 +113,9 @@ def test_info_describes_a_photograph_no_layout_fits(tmp_path):
     rng = np.random.default_rng(2)
     pixels = rng.uniform(0, 4, (860, 1262, 4)).astype(np.float16).astype(np.float32)
     path = tmp_path / "GoldenGate.exr"
-    _oiio_file(path, pixels, "RGBA", attributes={"owner": "ILM", "oiio:ColorSpace": "lin_rec709_scene"})
+    _oiio_file(
+        path, pixels, "RGBA", attributes={"owner": "ILM", "oiio:ColorSpace": "lin_rec709_scene"}
+    )
     result = run_cli(["info", path, "--json", "--stats"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
@@ -114,7 +125,9 @@ def test_info_describes_a_photograph_no_layout_fits(tmp_path):
     assert record["display_window"] == record["data_window"] == [0, 0, 1262, 860]
     assert record["channels"] == ["R", "G", "B", "A"] and record["channel_types"] == ["half"] * 4
     assert record["pixel_type"] == "half" and record["levels"] == [[1262, 860]]
-    assert [(p["name"], p["read"], p["channels"]) for p in record["parts"]] == [("", True, ["R", "G", "B", "A"])]
+    assert [(p["name"], p["read"], p["channels"]) for p in record["parts"]] == [
+        ("", True, ["R", "G", "B", "A"])
+    ]
     assert record["colorspace"] == "Linear Rec.709 (sRGB)"
     np.testing.assert_allclose(record["min"], pixels.min((0, 1)))
     np.testing.assert_allclose(record["max"], pixels.max((0, 1)))
@@ -175,7 +188,12 @@ def test_info_reads_headers_only_unless_stats(tmp_path):
     result = run_cli(["info", path, "--json"])
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
-    assert (record["layout"], record["size"], record["width"], record["height"]) == ("latlong", 32, 64, 32)
+    assert (record["layout"], record["size"], record["width"], record["height"]) == (
+        "latlong",
+        32,
+        64,
+        32,
+    )
     assert record["metadata"]["Copyright"] == "me"
     assert not {"min", "max", "nonfinite", "mean_radiance"} & set(record)
     stats = run_cli(["info", path, "--json", "--stats"])
@@ -192,7 +210,12 @@ def test_info_on_a_face_set_reports_the_files_colour_space_and_metadata(tmp_path
                    attributes={"oiio:ColorSpace": "srgb_rec709_scene", "Artist": "someone"})  # fmt: skip
     template = str(tmp_path / "sky_{face}.png")
     record = json.loads(run_cli(["info", template, "--json"]).stdout)
-    assert (record["layout"], record["size"], record["width"], record["height"]) == ("cube-faces", 8, 48, 8)
+    assert (record["layout"], record["size"], record["width"], record["height"]) == (
+        "cube-faces",
+        8,
+        48,
+        8,
+    )
     assert record["colorspace"].startswith("sRGB")
     assert record["metadata"]["oiio:ColorSpace"] == "srgb_rec709_scene"
     assert record["metadata"]["Artist"] == "someone"

@@ -1,6 +1,5 @@
 """Tests for envconv.color.ocio against analytic formulas, published matrices and hand counts."""
 
-
 import numpy as np
 import pytest
 from hypothesis import given, settings

@@ -63,7 +63,10 @@ def smooth_linear(scale=1.0):
 def test_srgb_png_to_latlong_exr_and_back_keeps_8bit_codes(tmp_path, bit_depth):
     codes = np.random.default_rng(7).integers(0, 256, (H, W, 3), dtype=np.uint8)
     write_plain(tmp_path / "in.png", codes / 255.0, pixel_type="uint8")
-    assert one_to_one(tmp_path / "in.png", tmp_path / "mid.exr", "--bit-depth", bit_depth).exit_code == 0
+    assert (
+        one_to_one(tmp_path / "in.png", tmp_path / "mid.exr", "--bit-depth", bit_depth).exit_code
+        == 0
+    )
     mid, attrs = read_raw(tmp_path / "mid.exr")
     assert attrs["oiio:ColorSpace"] == "lin_rec709_scene"
     # The EXR holds linear light: the sRGB decode of the codes (IEC 61966-2-1).
@@ -138,7 +141,10 @@ def test_no_clipping_warning_in_range_or_for_float(tmp_path):
     hot = smooth_linear(0.5)
     hot[0] = 1e4
     write_plain(tmp_path / "hot.exr", hot)
-    assert stderr_lines(one_to_one(tmp_path / "hot.exr", tmp_path / "out.tif", "--bit-depth", "float")) == []
+    assert (
+        stderr_lines(one_to_one(tmp_path / "hot.exr", tmp_path / "out.tif", "--bit-depth", "float"))
+        == []
+    )
 
 
 def test_half_overflow_warns_only_past_65504(tmp_path):
@@ -152,19 +158,33 @@ def test_half_overflow_warns_only_past_65504(tmp_path):
     assert stored[:2, :, 0].max() == 65504.0
     px[:2, :, 0] = 60000.0
     write_plain(tmp_path / "near.exr", px)
-    assert stderr_lines(one_to_one(tmp_path / "near.exr", tmp_path / "out2.exr", "--bit-depth", "half")) == []
+    assert (
+        stderr_lines(
+            one_to_one(tmp_path / "near.exr", tmp_path / "out2.exr", "--bit-depth", "half")
+        )
+        == []
+    )
     px[:2, :, 0] = 1e5
     write_plain(tmp_path / "big2.exr", px)
-    assert stderr_lines(one_to_one(tmp_path / "big2.exr", tmp_path / "out3.exr", "--bit-depth", "float")) == []
+    assert (
+        stderr_lines(
+            one_to_one(tmp_path / "big2.exr", tmp_path / "out3.exr", "--bit-depth", "float")
+        )
+        == []
+    )
 
 
 def test_exposure_scales_before_writing(tmp_path):
     px = smooth_linear(4.0)
     write_plain(tmp_path / "in.exr", px)
-    result = one_to_one(tmp_path / "in.exr", tmp_path / "out.exr", "--exposure", "-2", "--bit-depth", "float")
+    result = one_to_one(
+        tmp_path / "in.exr", tmp_path / "out.exr", "--exposure", "-2", "--bit-depth", "float"
+    )
     assert result.exit_code == 0
     np.testing.assert_allclose(read_raw(tmp_path / "out.exr")[0], px / 4, rtol=1e-6)
-    assert stderr_lines(one_to_one(tmp_path / "in.exr", tmp_path / "o.png", "--exposure", "-2")) == []
+    assert (
+        stderr_lines(one_to_one(tmp_path / "in.exr", tmp_path / "o.png", "--exposure", "-2")) == []
+    )
 
 
 def test_clamp_negative(tmp_path):
@@ -173,7 +193,9 @@ def test_clamp_negative(tmp_path):
     write_plain(tmp_path / "neg.exr", px)
     one_to_one(tmp_path / "neg.exr", tmp_path / "kept.exr", "--bit-depth", "float")
     assert read_raw(tmp_path / "kept.exr")[0][3, 5].tolist() == [-2.0, 0.5, pytest.approx(-0.1)]
-    one_to_one(tmp_path / "neg.exr", tmp_path / "zero.exr", "--clamp-negative", "--bit-depth", "float")
+    one_to_one(
+        tmp_path / "neg.exr", tmp_path / "zero.exr", "--clamp-negative", "--bit-depth", "float"
+    )
     assert read_raw(tmp_path / "zero.exr")[0][3, 5].tolist() == [0.0, 0.5, 0.0]
 
 

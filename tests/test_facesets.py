@@ -100,22 +100,28 @@ def gl_faces(names, to_world):
 
 FORMULAS = {
     # CONVENTIONS.md: envconv's own table is the GL table read in the left-handed c = (-x, y, z).
-    "envconv": lambda: gl_faces(("px", "nx", "py", "ny", "pz", "nz"), lambda c: (-c[0], c[1], c[2])),
+    "envconv": lambda: gl_faces(
+        ("px", "nx", "py", "ny", "pz", "nz"), lambda c: (-c[0], c[1], c[2])
+    ),
     "quake": quake_faces,
     "cube2": sauer_faces,
     # three.js backgroundCube.glsl.js: textureCube(envMap, vec3(flipEnvMap * dir.x, dir.yz)),
     # flipEnvMap = -1 for a CubeTexture; its world is Y-up right-handed like envconv's.
-    "threejs": lambda: gl_faces(("px", "nx", "py", "ny", "pz", "nz"), lambda c: (-c[0], c[1], c[2])),
+    "threejs": lambda: gl_faces(
+        ("px", "nx", "py", "ny", "pz", "nz"), lambda c: (-c[0], c[1], c[2])
+    ),
     # Unity: Skybox/6 Sided Left [+X] ... Front [+Z]; Unity's world is left-handed Y-up.
-    "unity-6sided": lambda: gl_faces(("left", "right", "up", "down", "front", "back"),
-                                     lambda c: (-c[0], c[1], c[2])),  # fmt: skip
+    "unity-6sided": lambda: gl_faces(
+        ("left", "right", "up", "down", "front", "back"), lambda c: (-c[0], c[1], c[2])
+    ),  # fmt: skip
     # Godot Cubemap docs: X+ X- Y+ Y- Z+ Z- sampled with texture(cube, EYEDIR); Y-up RH world.
     "godot": lambda: gl_faces(("x+", "x-", "y+", "y-", "z+", "z-"), lambda c: c),
     # Unreal: the D3D face vector is the Z-up LH world vector L (CalcCubeFaceViewRotationMatrix
     # renders +X with up +Y; the long-lat importer swizzles L only to feed a Y-up formula);
     # L to envconv by (x, y, z) -> (-y, z, x).
-    "unreal": lambda: gl_faces(("posx", "negx", "posy", "negy", "posz", "negz"),
-                               lambda c: (-c[1], c[2], c[0])),  # fmt: skip
+    "unreal": lambda: gl_faces(
+        ("posx", "negx", "posy", "negy", "posz", "negz"), lambda c: (-c[1], c[2], c[0])
+    ),  # fmt: skip
 }
 SETS = list(FORMULAS)
 

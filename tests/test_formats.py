@@ -89,7 +89,9 @@ def test_tiff_uint16_in_and_out(tmp_path):
     # float EXR -> 16-bit TIFF: sRGB-encoded codes (IEC formula; OCIO's toe differs by 2.5e-4)
     px = linear_values()
     write_plain(tmp_path / "lin.exr", px)
-    assert convert(tmp_path / "lin.exr", tmp_path / "enc.tif", "--bit-depth", "uint16").exit_code == 0
+    assert (
+        convert(tmp_path / "lin.exr", tmp_path / "enc.tif", "--bit-depth", "uint16").exit_code == 0
+    )
     enc = read_raw(tmp_path / "enc.tif", oiio.UINT16)[0].astype(np.float64)
     np.testing.assert_allclose(enc, srgb_encode(px) * 65535, atol=1.5)
 
@@ -115,7 +117,10 @@ def test_tiff_cannot_record_a_non_default_colour_space_and_says_so(tmp_path):
     assert result.exit_code == 0 and len(lines) == 1 and "--input-colorspace" in lines[0]
     back = io.read(tmp_path / "lin.tif", input_colorspace="linear")
     np.testing.assert_allclose(back.pixels, px, atol=1 / 65535)
-    assert stderr_lines(convert(tmp_path / "lin.exr", tmp_path / "srgb.tif", "--bit-depth", "uint16")) == []
+    assert (
+        stderr_lines(convert(tmp_path / "lin.exr", tmp_path / "srgb.tif", "--bit-depth", "uint16"))
+        == []
+    )
 
 
 # --- bit depth and compression ---------------------------------------------------------------
@@ -168,14 +173,20 @@ def test_metadata_survives_a_round_trip(tmp_path):
     spec_fix = oiio.ImageBuf(str(src))  # add chromaticities with their proper float[8] type
     spec_fix.specmod().attribute("chromaticities", oiio.TypeDesc("float[8]"), REC709)
     assert spec_fix.write(str(tmp_path / "in2.exr"))
-    result = run_cli(["convert", tmp_path / "in2.exr", tmp_path / "out.exr", "--to", "cube-hcross", "--size", 8])
+    result = run_cli(
+        ["convert", tmp_path / "in2.exr", tmp_path / "out.exr", "--to", "cube-hcross", "--size", 8]
+    )
     assert result.exit_code == 0
     _, out, _ = read_raw(tmp_path / "out.exr")
     assert out["Copyright"] == "Jane Roe" and out["ImageDescription"] == "test sky, 2024"
     assert out["Owner"] == "studio"
     assert out["chromaticities"] == pytest.approx(REC709, abs=1e-6)
     assert out["oiio:ColorSpace"] == "lin_rec709_scene"
-    assert (out["envconv:layout"], out["envconv:size"], out["envconv:guard"]) == ("cube-hcross", 8, 0)
+    assert (out["envconv:layout"], out["envconv:size"], out["envconv:guard"]) == (
+        "cube-hcross",
+        8,
+        0,
+    )
     assert out["envconv:version"]
     info = run_cli(["info", tmp_path / "out.exr", "--json"])
     record = json.loads(info.stdout)
@@ -217,8 +228,12 @@ def test_dry_run_reads_only_the_header(tmp_path):
     write_plain(tmp_path / "in.exr", linear_values())
     data = (tmp_path / "in.exr").read_bytes()
     (tmp_path / "cut.exr").write_bytes(data[: len(data) - 200])  # header intact, pixels not
-    dry = run_cli(["convert", tmp_path / "cut.exr", tmp_path / "o.hdr", "--to", "latlong", "--dry-run"])
-    assert dry.exit_code == 0 and "bit depth: float" in dry.stdout and "channels: R,G,B" in dry.stdout
+    dry = run_cli(
+        ["convert", tmp_path / "cut.exr", tmp_path / "o.hdr", "--to", "latlong", "--dry-run"]
+    )
+    assert (
+        dry.exit_code == 0 and "bit depth: float" in dry.stdout and "channels: R,G,B" in dry.stdout
+    )
     real = run_cli(["convert", tmp_path / "cut.exr", tmp_path / "o.hdr", "--to", "latlong"])
     assert real.exit_code == 1 and not (tmp_path / "o.hdr").exists()
 

@@ -17,7 +17,9 @@ from envconv.layouts.geometry import (
 )
 
 NAMES = list(LAYOUTS)
-RECT = [name for name in NAMES if name not in ("sphere", "angular", "paraboloid", "paraboloid-split")]
+RECT = [
+    name for name in NAMES if name not in ("sphere", "angular", "paraboloid", "paraboloid-split")
+]
 DISKS = ["sphere", "angular", "paraboloid", "paraboloid-split"]
 # Tennisball's bands overlap (CONVENTIONS: about 6% of the sphere) and every pixel of both is
 # valid, so its pixels cover two bands of (3π/2) · 2 sin(π/4) sr each rather than 4π.

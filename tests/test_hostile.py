@@ -37,8 +37,6 @@ def test_convert_refuses_to_write_onto_its_input(tmp_path):
 # Usage refusals exit 2 once helper "messages" lands UsageError -> 2; until then 1 is accepted.
 
 
-
-
 def _map(path, value=1.0):
     write_plain(path, np.full((8, 16, 3), value, np.float32))
     return path
@@ -285,8 +283,6 @@ def test_ulimit_is_respected(tmp_path):
 # their input; temp files found by name (hostile.litter).
 
 
-
-
 def _noise(path, height=64, seed=0):
     """A lat-long of random values: compresses badly, so its outputs are large."""
     pixels = np.random.default_rng(seed).random((height, 2 * height, 3), dtype=np.float32)
@@ -352,7 +348,9 @@ def test_temp_files_are_never_inputs_and_stale_ones_are_cleaned(tmp_path):
                   "resample", "--to", "cube-vcross", "--size", 4)  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert [r["input"] for r in json.loads(report.read_text())["files"]] == [str(source)]
-    assert sorted(os.listdir(tmp_path)) == sorted([live.name, "report.json", "sky.exr", "sky_cross.exr"])
+    assert sorted(os.listdir(tmp_path)) == sorted(
+        [live.name, "report.json", "sky.exr", "sky_cross.exr"]
+    )
     assert source.read_bytes() == data
 
 
@@ -579,8 +577,6 @@ def test_one_and_two_workers_write_identical_bytes(tmp_path):
 # --- messages: hostile inputs and arguments, exit statuses, library chatter, did-you-mean ---
 
 
-
-
 def _oiio_write(path, pixels, pixel_type="float", attributes=None):
     """An image written by OpenImageIO directly (any pixel type; no envconv tags)."""
     import OpenImageIO as oiio
@@ -665,7 +661,9 @@ def test_truncated_input_in_a_chain_and_in_info_keeps_stdout_clean(tmp_path):
     data = _noise_exr(tmp_path / "whole.exr").read_bytes()
     source = tmp_path / "cut.exr"
     source.write_bytes(data[: len(data) * 2 // 3])
-    run = envconv("read", source, "resample", "--to", "latlong", "--size", "4", "write", tmp_path / "o.exr")
+    run = envconv(
+        "read", source, "resample", "--to", "latlong", "--size", "4", "write", tmp_path / "o.exr"
+    )
     assert_failed_cleanly(run, 1, tmp_path, message="cut.exr")
     assert_failed_cleanly(envconv("info", source, "--stats"), 1, tmp_path, message="cut.exr")
     header = envconv("info", source, "--json")  # the header is whole: info needs no pixel
@@ -842,7 +840,9 @@ def test_missing_to_lists_the_layouts(tmp_path):
 def test_a_misspelt_step_is_named(tmp_path, chain, typo, meant):
     source = _noise_exr(tmp_path / "in.exr", 8)
     run = envconv("read", source, *chain, cwd=tmp_path)
-    assert_failed_cleanly(run, 2, tmp_path, message=f"no such command '{typo}'; did you mean '{meant}'?")
+    assert_failed_cleanly(
+        run, 2, tmp_path, message=f"no such command '{typo}'; did you mean '{meant}'?"
+    )
     run = envconv(typo, cwd=tmp_path)
     assert_failed_cleanly(run, 2, tmp_path, message=f"did you mean '{meant}'?")
 
@@ -861,7 +861,9 @@ def test_layout_typos_and_families_are_answered(tmp_path, name, message):
 def test_equirect_aliases_are_latlong(tmp_path, alias):
     source = _noise_exr(tmp_path / "in.exr", 8)
     out = tmp_path / "{layout}.exr"  # the name the layout was given its registered name by
-    run = envconv("read", source, "--from", alias, "resample", "--to", alias, "--size", "8", "write", out)
+    run = envconv(
+        "read", source, "--from", alias, "resample", "--to", alias, "--size", "8", "write", out
+    )
     assert (run.returncode, run.stdout, run.stderr) == (0, f"{tmp_path / 'latlong.exr'}\n", "")
     written, spec = _read_back(tmp_path / "latlong.exr")
     assert spec.get_string_attribute("envconv:layout") == "latlong"
@@ -900,5 +902,7 @@ def test_nan_to_an_integer_format_prints_envconv_lines_only(tmp_path, output):
     run = envconv("convert", source, tmp_path / output, "--to", layout, "--size", "8",
                   "--bit-depth", "uint8")  # fmt: skip
     assert run.returncode == 0, run.stderr
-    assert run.stderr_lines and all(line.startswith("envconv: warning: ") for line in run.stderr_lines), run.stderr
+    assert run.stderr_lines and all(
+        line.startswith("envconv: warning: ") for line in run.stderr_lines
+    ), run.stderr
     assert "RuntimeWarning" not in run.stderr

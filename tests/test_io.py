@@ -98,7 +98,9 @@ def test_half_exr_keeps_hdr_range(tmp_path):
 # Metadata and detection through files
 
 
-@pytest.mark.parametrize("name, envmap", [("latlong", "ENVMAP_LATLONG"), ("cube-exr", "ENVMAP_CUBE")])
+@pytest.mark.parametrize(
+    "name, envmap", [("latlong", "ENVMAP_LATLONG"), ("cube-exr", "ENVMAP_CUBE")]
+)
 def test_exr_envmap_attribute(tmp_path, name, envmap):
     import OpenEXR
 
@@ -491,7 +493,9 @@ def test_exrs_written_by_openexr_read_as_oiio_reads_them(tmp_path, label):
     _openexr_file(tmp_path / "case.exr", {k: v for k, v in case.items() if k not in known},
                   **{k: v for k, v in case.items() if k in known})  # fmt: skip
     pixels, channels, metadata, pixel_type = read_image(tmp_path / "case.exr")
-    np.testing.assert_array_equal(pixels.reshape(-1), np.asarray(_oiio_pixels(tmp_path / "case.exr")).reshape(-1))
+    np.testing.assert_array_equal(
+        pixels.reshape(-1), np.asarray(_oiio_pixels(tmp_path / "case.exr")).reshape(-1)
+    )
     assert channels == tuple(_oiio_channel_names(tmp_path / "case.exr"))
     assert list(metadata.items()) == list(_oiio_metadata(tmp_path / "case.exr").items())
     assert pixel_type == ("half" if case.get("dtype") == np.float16 else "float")
@@ -568,7 +572,11 @@ def test_exrs_envconv_writes_read_in_openexr_as_written(
             np.testing.assert_array_equal(channels[name].pixels, stored[..., k])
     assert header["compression"] == getattr(OpenEXR, {None: "ZIP", "none": "NO"}.get(
         compression, str(compression).upper()) + "_COMPRESSION")  # fmt: skip
-    assert (header["envconv:layout"], header["envconv:size"], header["envconv:guard"]) == (layout, 8, 0)
+    assert (header["envconv:layout"], header["envconv:size"], header["envconv:guard"]) == (
+        layout,
+        8,
+        0,
+    )
     envmaps = {"latlong": OpenEXR.Envmap.ENVMAP_LATLONG, "cube-exr": OpenEXR.Envmap.ENVMAP_CUBE}
     assert header.get("envmap") == envmaps.get(layout)
     space = metadata.get("oiio:ColorSpace", "lin_rec709_scene")

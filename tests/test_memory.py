@@ -62,7 +62,7 @@ def sources(tmp_path_factory):
 
 def _measure(folder, tiny, source, out_name: str, resample: dict) -> tuple[int, int]:
     """(warm baseline, peak) bytes of converting ``source`` in a fresh process."""
-    ext = out_name[out_name.rindex("."):]
+    ext = out_name[out_name.rindex(".") :]
     done = subprocess.run(
         [sys.executable, "-c", PROBE, str(tiny), str(folder / f"tiny-out{ext}"), str(source),
          str(folder / out_name), json.dumps(resample)],
@@ -75,7 +75,9 @@ def _measure(folder, tiny, source, out_name: str, resample: dict) -> tuple[int, 
 def _array_bytes(source, out) -> tuple[int, int]:
     """(input, output) float32 array bytes: the source as read, every level written."""
     width, height, channels, _ = envconv.io.read_header(source)
-    written = sum(w * h for w, h in envconv.io.mip_levels(out)) * len(envconv.io.read_header(out)[2])
+    written = sum(w * h for w, h in envconv.io.mip_levels(out)) * len(
+        envconv.io.read_header(out)[2]
+    )
     return width * height * len(channels) * 4, written * 4
 
 
@@ -160,9 +162,13 @@ def test_estimate_grows_with_every_array():
     sky = envconv.EnvMap(np.ones((64, 128, 3), np.float32), "latlong")
     base = envconv.resample.convert.memory_needed(sky, "cube-vcross", size=256, samples=2)
     plane = 4 * 256 * 3 * 256 * 4  # one float32 plane of the 3N × 4N cross
-    alpha = envconv.resample.convert.memory_needed(sky, "cube-vcross", size=256, samples=2, alpha=True)
+    alpha = envconv.resample.convert.memory_needed(
+        sky, "cube-vcross", size=256, samples=2, alpha=True
+    )
     assert alpha - base >= plane  # the alpha channel in the output
-    chain = envconv.resample.convert.memory_needed(sky, "cube-vcross", size=256, samples=2, mips=True)
+    chain = envconv.resample.convert.memory_needed(
+        sky, "cube-vcross", size=256, samples=2, mips=True
+    )
     assert chain - base > 0.9 * plane  # a third more output and the float32 weights of each level
     holes = envconv.EnvMap(sky.pixels, "latlong", valid=np.ones((64, 128), np.float32))
     assert envconv.resample.convert.memory_needed(holes, "cube-vcross", size=256, samples=2) > base

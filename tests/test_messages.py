@@ -33,7 +33,8 @@ def test_each_kind_of_error_has_its_status_and_one_line(monkeypatch, exc, status
 
 def test_one_line_joins_lines():
     assert one_line("Missing option '--to'. Choose from:\n\tlatlong,\n\tsphere") == (
-        "Missing option '--to'. Choose from: latlong, sphere")
+        "Missing option '--to'. Choose from: latlong, sphere"
+    )
     assert one_line("\n \n") == "unknown error"
 
 
@@ -52,7 +53,9 @@ def test_layout_names_aliases_and_families():
     assert ALIASES == {"equirect": "latlong", "equirectangular": "latlong"}
     assert get_layout("Equirectangular") is LAYOUTS["latlong"]
     assert set(FAMILIES["cubemap"]) == {n for n in LAYOUTS if n.startswith("cube-")}
-    with pytest.raises(LayoutError, match="'cubemap' names several layouts; choose one of cube-vcross"):
+    with pytest.raises(
+        LayoutError, match="'cubemap' names several layouts; choose one of cube-vcross"
+    ):
         get_layout("cubemap")
     with pytest.raises(LayoutError, match="did you mean 'paraboloid'"):
         get_layout("parabloid")
@@ -68,7 +71,8 @@ def test_a_python_warning_is_one_line():
     stream = io.StringIO()
     show_warning("invalid value\n  encountered", RuntimeWarning, "/x/quantize.py", 136, stream)
     assert stream.getvalue() == (
-        "envconv: warning: RuntimeWarning: invalid value encountered (quantize.py:136)\n")
+        "envconv: warning: RuntimeWarning: invalid value encountered (quantize.py:136)\n"
+    )
 
 
 def test_layouts_lists_the_aliases():

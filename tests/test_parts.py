@@ -69,18 +69,28 @@ def test_every_part_of_one_environment_is_converted_and_keeps_its_name(tmp_path,
                                          ("diffuse", ("diffuse.R", "diffuse.G", "diffuse.B"), aov, None)])  # fmt: skip
     env = envconv.read(tmp_path / "multi.exr")
     assert env.channels == ("R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B")
-    assert env.parts == (("beauty", ("R", "G", "B", "A")), ("diffuse", ("diffuse.R", "diffuse.G", "diffuse.B")))
+    assert env.parts == (
+        ("beauty", ("R", "G", "B", "A")),
+        ("diffuse", ("diffuse.R", "diffuse.G", "diffuse.B")),
+    )
     common = ["--to", "cube-vcross", "--size", "16", "--bit-depth", "float"]
     result = run_cli(["convert", tmp_path / "multi.exr", tmp_path / "out.exr", *common])
     assert result.exit_code == 0, result.stderr
     _single(tmp_path / "b.exr", rgba, "RGBA")
     _single(tmp_path / "d.exr", aov, ("diffuse.R", "diffuse.G", "diffuse.B"))
     for name in ("b", "d"):
-        assert run_cli(["convert", tmp_path / f"{name}.exr", tmp_path / f"{name}-out.exr", *common]).exit_code == 0
+        assert (
+            run_cli(
+                ["convert", tmp_path / f"{name}.exr", tmp_path / f"{name}-out.exr", *common]
+            ).exit_code
+            == 0
+        )
     written = openexr_parts(tmp_path / "out.exr")
     assert list(written) == ["beauty", "diffuse"]
     beauty, diffuse = (next(iter(openexr_parts(tmp_path / f"{n}-out.exr").values())) for n in "bd")
-    assert sorted(written["beauty"]) == sorted(beauty) and sorted(written["diffuse"]) == sorted(diffuse)
+    assert sorted(written["beauty"]) == sorted(beauty) and sorted(written["diffuse"]) == sorted(
+        diffuse
+    )
     for got, want in ((written["beauty"], beauty), (written["diffuse"], diffuse)):
         for channel in want:
             np.testing.assert_allclose(got[channel], want[channel], rtol=1e-6, atol=1e-7)
@@ -88,20 +98,28 @@ def test_every_part_of_one_environment_is_converted_and_keeps_its_name(tmp_path,
     assert back.parts == env.parts and back.layout.name == "cube-vcross"
 
 
-def test_plain_channel_names_in_later_parts_are_prefixed_and_written_back_plain(tmp_path, beauty_and_aov):
+def test_plain_channel_names_in_later_parts_are_prefixed_and_written_back_plain(
+    tmp_path, beauty_and_aov
+):
     rgba, aov = beauty_and_aov
-    write_parts(tmp_path / "multi.exr", [("beauty", "RGBA", rgba, None), ("spec", "RGB", aov, None)])
+    write_parts(
+        tmp_path / "multi.exr", [("beauty", "RGBA", rgba, None), ("spec", "RGB", aov, None)]
+    )
     env = envconv.read(tmp_path / "multi.exr")
     assert env.channels == ("R", "G", "B", "A", "spec.R", "spec.G", "spec.B")
     envconv.write(env, tmp_path / "out.exr", bit_depth="half")
     written = openexr_parts(tmp_path / "out.exr")
     assert sorted(written["spec"]) == ["B", "G", "R"]
-    np.testing.assert_array_equal(written["spec"]["G"], aov[:, :, 1].astype(np.float16).astype(np.float32))
+    np.testing.assert_array_equal(
+        written["spec"]["G"], aov[:, :, 1].astype(np.float16).astype(np.float32)
+    )
 
 
 def test_part_picks_one_part(tmp_path, beauty_and_aov):
     rgba, aov = beauty_and_aov
-    write_parts(tmp_path / "multi.exr", [("beauty", "RGBA", rgba, None), ("diffuse", "RGB", aov, None)])
+    write_parts(
+        tmp_path / "multi.exr", [("beauty", "RGBA", rgba, None), ("diffuse", "RGB", aov, None)]
+    )
     env = envconv.read(tmp_path / "multi.exr", part="diffuse")
     assert env.channels == ("R", "G", "B") and env.parts == ()
     np.testing.assert_array_equal(env.pixels, aov.astype(np.float16).astype(np.float32))
@@ -141,7 +159,11 @@ def test_info_lists_the_parts_and_which_are_read(tmp_path, beauty_and_aov):
     assert result.exit_code == 0, result.stderr
     record = json.loads(result.stdout)
     assert record["layout"] == "latlong"
-    assert [(p["name"], p["read"]) for p in record["parts"]] == [("beauty", True), ("diffuse", True), ("crop", False)]
+    assert [(p["name"], p["read"]) for p in record["parts"]] == [
+        ("beauty", True),
+        ("diffuse", True),
+        ("crop", False),
+    ]
     assert "windows differ" in record["parts"][2]["why"]
     assert record["parts"][2]["data_window"] == [0, 0, 64, 16]
     assert record["channels"] == ["R", "G", "B", "A", "diffuse.R", "diffuse.G", "diffuse.B"]
@@ -157,25 +179,40 @@ def test_holes_in_a_multi_part_file_give_the_first_part_an_alpha(tmp_path, beaut
     assert run_cli(["convert", tmp_path / "top.exr", tmp_path / "out.exr", "--to", "cube-vcross",
                     "--size", "8"]).exit_code == 0  # fmt: skip
     written = openexr_parts(tmp_path / "out.exr")
-    assert sorted(written["beauty"]) == ["A", "B", "G", "R"] and sorted(written["diffuse"]) == ["B", "G", "R"]
+    assert sorted(written["beauty"]) == ["A", "B", "G", "R"] and sorted(written["diffuse"]) == [
+        "B",
+        "G",
+        "R",
+    ]
 
 
 def test_alpha_added_by_resampling_joins_the_first_part(tmp_path, beauty_and_aov):
     rgba, aov = beauty_and_aov
-    write_parts(tmp_path / "multi.exr", [("beauty", "RGB", rgba[:, :, :3], None), ("diffuse", "RGB", aov, None)])
+    write_parts(
+        tmp_path / "multi.exr",
+        [("beauty", "RGB", rgba[:, :, :3], None), ("diffuse", "RGB", aov, None)],
+    )
     result = run_cli(["convert", tmp_path / "multi.exr", tmp_path / "out.exr", "--to", "sphere",
                       "--size", "16", "--alpha"])  # fmt: skip
     assert result.exit_code == 0, result.stderr
     written = openexr_parts(tmp_path / "out.exr")
-    assert sorted(written["beauty"]) == ["A", "B", "G", "R"] and sorted(written["diffuse"]) == ["B", "G", "R"]
+    assert sorted(written["beauty"]) == ["A", "B", "G", "R"] and sorted(written["diffuse"]) == [
+        "B",
+        "G",
+        "R",
+    ]
     assert written["beauty"]["A"].max() == 1.0 and written["beauty"]["A"].min() == 0.0
 
 
 def test_formats_of_one_image_ask_for_a_part_and_mips_for_level_files(tmp_path, beauty_and_aov):
     rgba, aov = beauty_and_aov
-    write_parts(tmp_path / "multi.exr", [("beauty", "RGBA", rgba, None), ("diffuse", "RGB", aov, None)])
+    write_parts(
+        tmp_path / "multi.exr", [("beauty", "RGBA", rgba, None), ("diffuse", "RGB", aov, None)]
+    )
     for output, extra in (("out.png", []), ("out.exr", ["--mips"])):
-        result = run_cli(["convert", tmp_path / "multi.exr", tmp_path / output, "--to", "latlong", *extra])
+        result = run_cli(
+            ["convert", tmp_path / "multi.exr", tmp_path / output, "--to", "latlong", *extra]
+        )
         assert result.exit_code == 1
         (line,) = stderr_lines(result)
         assert "--part" in line, line

@@ -299,7 +299,9 @@ def test_a_pipeline_never_writes_onto_its_input(sky, tmp_path, make_link):
 
     source = tmp_path / "in.exr"
     shutil.copy(sky, source)
-    target = {"same": source, "symlink": tmp_path / "s.exr", "hardlink": tmp_path / "h.exr"}[make_link]
+    target = {"same": source, "symlink": tmp_path / "s.exr", "hardlink": tmp_path / "h.exr"}[
+        make_link
+    ]
     if make_link == "symlink":
         os.symlink(source, target)
     elif make_link == "hardlink":
@@ -349,7 +351,10 @@ def test_convert_file_is_the_pipeline_read_resample_write(tmp_path):
 def test_user_variables_use_each_other_but_not_in_a_cycle():
     from envconv.engine.steps import check_variables
 
-    assert check_variables({"a": "{dir}/x", "b": "{a}_{stem}"}) == {"a": "{dir}/x", "b": "{dir}/x_{stem}"}
+    assert check_variables({"a": "{dir}/x", "b": "{a}_{stem}"}) == {
+        "a": "{dir}/x",
+        "b": "{dir}/x_{stem}",
+    }
     with pytest.raises(UsageError, match="cycle"):
         check_variables({"a": "{b}", "b": "{a}"})
     with pytest.raises(UsageError, match="unknown variable"):

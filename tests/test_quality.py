@@ -171,7 +171,10 @@ def test_single_tap_loses_highlight_energy(starfield):
     """The same reduction with one sample per pixel misses or doubles highlights."""
     source, energy = starfield
     errors = [
-        abs(_energy(envconv.convert(source, n, size=default_size(source, n) // 4, samples=1)) - energy)
+        abs(
+            _energy(envconv.convert(source, n, size=default_size(source, n) // 4, samples=1))
+            - energy
+        )
         / energy
         for n in ("latlong", "sphere", "paraboloid")
     ]
@@ -209,8 +212,12 @@ def test_single_sample_tiles_match_naive_as_stored(name, n, channels, alpha):
     map) or with the coverage after the colour (--alpha): each pixel is the bilinear read at
     its centre's direction, the exact per-sample reference's, in every channel."""
     rgb = naive.pixel_average("latlong", 128, analytic.radiance, 2)
-    source = np.concatenate([rgb, rgb[..., :1] * 0.5 + 0.25], axis=-1)[..., :channels].astype(np.float32)
-    result = envconv.convert(envconv.EnvMap(source, "latlong"), name, size=n, samples=1, alpha=alpha)
+    source = np.concatenate([rgb, rgb[..., :1] * 0.5 + 0.25], axis=-1)[..., :channels].astype(
+        np.float32
+    )
+    result = envconv.convert(
+        envconv.EnvMap(source, "latlong"), name, size=n, samples=1, alpha=alpha
+    )
     expected, coverage = naive.naive_convert(source, name, n, 1)
     scale = np.abs(expected).max()
     np.testing.assert_allclose(result.pixels[..., :channels], expected, rtol=0, atol=2e-3 * scale)

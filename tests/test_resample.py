@@ -102,7 +102,9 @@ def test_every_layout_converts_to_latlong_accurately(name, latlong_truth):
     result = envconv.convert(source, to="latlong", size=N_LATLONG)
     omega = _omega("latlong", N_LATLONG)
     half_u = 0.5 * (latlong_truth + np.roll(latlong_truth, 1, axis=1))
-    assert rel_rms(result.pixels, latlong_truth, omega) < 0.5 * rel_rms(half_u, latlong_truth, omega)
+    assert rel_rms(result.pixels, latlong_truth, omega) < 0.5 * rel_rms(
+        half_u, latlong_truth, omega
+    )
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -295,7 +297,9 @@ def _centroid(envmap):
     ],
 )
 def test_rotation_moves_content_as_documented(angles, target):
-    pixels = naive.pixel_average("latlong", 32, lambda d: analytic.lobe(d, [0, 0, 1], 40)[..., None], 4)
+    pixels = naive.pixel_average(
+        "latlong", 32, lambda d: analytic.lobe(d, [0, 0, 1], 40)[..., None], 4
+    )
     source = envconv.EnvMap(pixels, "latlong")
     assert np.dot(_centroid(source), [0, 0, 1]) > 0.999
     rotated = envconv.convert(source, to="latlong", size=32, rotate=angles)

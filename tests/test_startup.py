@@ -92,8 +92,10 @@ _BLAS_PROBE = (
 )
 
 
-@pytest.mark.skipif(not os.path.isdir("/proc/self/task") or len(os.sched_getaffinity(0)) < 2,
-                    reason="counts the process's threads in /proc on a machine of 2+ cores")
+@pytest.mark.skipif(
+    not os.path.isdir("/proc/self/task") or len(os.sched_getaffinity(0)) < 2,
+    reason="counts the process's threads in /proc on a machine of 2+ cores",
+)
 def test_the_command_line_starts_numpy_without_a_blas_thread_pool():
     """``envconv`` asks OpenBLAS for no thread pool before numpy loads (a one shot ends sooner
     and no idle BLAS thread competes with the core's); a value the user set is kept, and then

@@ -119,8 +119,12 @@ def test_convention_selector_shows_the_map_as_that_tool_would(shoot, tmp_path, p
     and wrong as envconv's own lat-long."""
     page = _page(tmp_path, render_pattern("latlong", 256, samples=2, convention=preset))
     for axis in LABELS:
-        _, right = _label_error(shoot(page, f"view={axis}&conv={preset}&{RAW}"), camera_dirs(axis, SIZE))
-        _, wrong = _label_error(shoot(page, f"view={axis}&conv=envconv&{RAW}"), camera_dirs(axis, SIZE))
+        _, right = _label_error(
+            shoot(page, f"view={axis}&conv={preset}&{RAW}"), camera_dirs(axis, SIZE)
+        )
+        _, wrong = _label_error(
+            shoot(page, f"view={axis}&conv=envconv&{RAW}"), camera_dirs(axis, SIZE)
+        )
         assert right < BLOCK_LIMIT < wrong, (preset, axis, right, wrong)
 
 

@@ -72,6 +72,3 @@ def test_the_wheel_installs_into_a_fresh_venv_and_converts(wheel, tmp_path):
     omega_in = pixel_solid_angles("latlong", 16)
     want = (np.repeat(rows[:, None], 32, axis=1) * omega_in).sum() / omega_in.sum()
     assert abs(got - want) < 0.02 * want
-
-
-

@@ -51,7 +51,9 @@ def test_top_half_data_window_reads_as_the_display_window_with_a_hole(tmp_path, 
     assert env.channels == ("R", "G", "B", "A")
     np.testing.assert_array_equal(env.pixels[:16, :, :3], sky[:16])
     np.testing.assert_array_equal(env.pixels[16:], 0)
-    np.testing.assert_array_equal(env.pixels[:, :, 3], np.repeat([1.0, 0.0], 16)[:, None] * np.ones(64))
+    np.testing.assert_array_equal(
+        env.pixels[:, :, 3], np.repeat([1.0, 0.0], 16)[:, None] * np.ones(64)
+    )
     np.testing.assert_array_equal(env.valid, env.pixels[:, :, 3])
 
 
@@ -86,7 +88,9 @@ def test_offset_data_window_turns_the_environment_where_it_holds_data(tmp_path, 
     alpha = shifted.pixels[:, :, 3]
     full = alpha == 1.0
     assert full.mean() > 0.35 and (alpha == 0).any()  # the cross itself is half the image
-    np.testing.assert_allclose(shifted.pixels[full][:, :3], turned.pixels[full][:, :3], rtol=1e-5, atol=1e-6)
+    np.testing.assert_allclose(
+        shifted.pixels[full][:, :3], turned.pixels[full][:, :3], rtol=1e-5, atol=1e-6
+    )
     np.testing.assert_array_equal(shifted.pixels[alpha == 0], 0)
 
 
@@ -101,7 +105,9 @@ def test_a_hole_converts_as_a_hole_not_as_black_sky(tmp_path, sky, flag):
 
     def convert(pixels, name):
         write_window(tmp_path / f"{name}.exr", pixels, (0, 0, 64, 32), (0, 0, 64, pixels.shape[0]))
-        result = run_cli(["convert", tmp_path / f"{name}.exr", tmp_path / f"{name}-cross.exr", *common])
+        result = run_cli(
+            ["convert", tmp_path / f"{name}.exr", tmp_path / f"{name}-cross.exr", *common]
+        )
         assert result.exit_code == 0, result.stderr
         return envconv.read(tmp_path / f"{name}-cross.exr").pixels
 
@@ -187,13 +193,23 @@ def test_dry_run_plans_the_display_window(tmp_path, sky):
 
 def test_from_a_layout_the_size_does_not_fit_says_which_sizes_would(tmp_path):
     """The hint no longer goes in a circle: it names the rule, sizes that fit, and what to do."""
-    write_window(tmp_path / "odd.exr", np.ones((41, 50, 3), np.float32), (0, 0, 50, 41), (0, 0, 50, 41))
+    write_window(
+        tmp_path / "odd.exr", np.ones((41, 50, 3), np.float32), (0, 0, 50, 41), (0, 0, 50, 41)
+    )
     result = run_cli(["convert", tmp_path / "odd.exr", tmp_path / "o.exr", "--from", "latlong",
                       "--to", "cube-vcross"])  # fmt: skip
     assert result.exit_code == 1
     (line,) = stderr_lines(result)
-    for words in ("latlong", "needs width = 2 × height", "50x41 is not", "82x41", "50x25",
-                  "crop or resize", "--from with the layout it is in", "fits no layout"):
+    for words in (
+        "latlong",
+        "needs width = 2 × height",
+        "50x41 is not",
+        "82x41",
+        "50x25",
+        "crop or resize",
+        "--from with the layout it is in",
+        "fits no layout",
+    ):
         assert words in line, (words, line)
     assert not os.path.exists(tmp_path / "o.exr")
     with pytest.raises(envconv.LayoutError, match="width:height = 3:4"):
@@ -201,18 +217,26 @@ def test_from_a_layout_the_size_does_not_fit_says_which_sizes_would(tmp_path):
 
 
 def test_an_unknown_aspect_lists_the_aspects_layouts_have(tmp_path):
-    write_window(tmp_path / "odd.exr", np.ones((43, 63, 3), np.float32), (0, 0, 63, 43), (0, 0, 63, 43))
+    write_window(
+        tmp_path / "odd.exr", np.ones((43, 63, 3), np.float32), (0, 0, 63, 43), (0, 0, 63, 43)
+    )
     with pytest.raises(envconv.LayoutError) as info:
         envconv.read(tmp_path / "odd.exr")
     message = str(info.value)
-    assert "63x43" in message and "2:1 latlong or paraboloid" in message and "3:4 cube-vcross" in message
+    assert (
+        "63x43" in message
+        and "2:1 latlong or paraboloid" in message
+        and "3:4 cube-vcross" in message
+    )
 
 
 def test_every_mip_level_treats_a_hole_as_a_hole(tmp_path):
     """A constant sky held above a hole: every level of the chain is the constant wherever it
     holds anything, and each level's alpha is the solid-angle-weighted block average of the
     level above it (the chain's own rule, docs/masks-guards-mips.md)."""
-    write_window(tmp_path / "flat.exr", np.full((13, 64, 3), 3.0, np.float32), (0, 0, 64, 32), (0, 0, 64, 13))
+    write_window(
+        tmp_path / "flat.exr", np.full((13, 64, 3), 3.0, np.float32), (0, 0, 64, 32), (0, 0, 64, 13)
+    )
     env = envconv.read(tmp_path / "flat.exr")
     result = envconv.convert(env, "latlong", size=16, mips=True)
     assert len(result.levels) == 6
@@ -225,5 +249,7 @@ def test_every_mip_level_treats_a_hole_as_a_hole(tmp_path):
             finer = result.levels[k - 1][:, :, 3]
             omega = naive.pixel_solid_angles("latlong", finer.shape[0], 8)
             shape = (level.shape[0], 2, level.shape[1], 2)
-            blocks = (finer * omega).reshape(shape).sum(axis=(1, 3)) / omega.reshape(shape).sum(axis=(1, 3))
+            blocks = (finer * omega).reshape(shape).sum(axis=(1, 3)) / omega.reshape(shape).sum(
+                axis=(1, 3)
+            )
             np.testing.assert_allclose(level[:, :, 3], blocks, atol=1e-4)

@@ -116,7 +116,12 @@ def resample_step(**options):
 @click.argument("output_path", metavar="OUTPUT")
 @write_options
 @no_clobber_option
-@click.option("--preview", "preview", metavar="PNG", help="Also write a tone-mapped 8-bit picture of what is written (same path variables; see docs/check-a-map.md).")
+@click.option(
+    "--preview",
+    "preview",
+    metavar="PNG",
+    help="Also write a tone-mapped 8-bit picture of what is written (same path variables; see docs/check-a-map.md).",
+)
 def write_step(output_path, preview, no_clobber, **options):
     """Write the latest output (the last resample, or the source) to OUTPUT.
 

@@ -25,7 +25,12 @@ __all__ = ["convert_command"]
 @resample_options
 @write_options
 @no_clobber_option
-@click.option("--preview", "preview", metavar="PNG", help="Also write a tone-mapped 8-bit picture of the output (auto exposure, ACES SDR view; see docs/check-a-map.md).")
+@click.option(
+    "--preview",
+    "preview",
+    metavar="PNG",
+    help="Also write a tone-mapped 8-bit picture of the output (auto exposure, ACES SDR view; see docs/check-a-map.md).",
+)
 @click.option("--dry-run", is_flag=True, help="Print what would be written; write nothing.")
 def convert_command(input_path, output_path, dry_run, preview, no_clobber, **options):
     """Convert INPUT to layout --to and write OUTPUT.

@@ -16,8 +16,12 @@ __all__ = ["info_command"]
 @click.argument("input_path", metavar="INPUT")
 @click.option("--from", "from_", type=layout_choice(), help="Input layout (default: detect).")
 @click.option("--level", type=click.IntRange(min=0), default=0, help="MIP level to read.")
-@click.option("--part", metavar="NAME", help="Part of a multi-part file to describe alone (name or index).")
-@click.option("--stats", is_flag=True, help="Also read the pixels: value range, NaN/Inf count, mean radiance.")
+@click.option(
+    "--part", metavar="NAME", help="Part of a multi-part file to describe alone (name or index)."
+)
+@click.option(
+    "--stats", is_flag=True, help="Also read the pixels: value range, NaN/Inf count, mean radiance."
+)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object.")
 def info_command(input_path, from_, level, part, stats, as_json):
     """Describe INPUT, any image: layout, size, windows, channels, parts, colour space, metadata.

@@ -45,7 +45,9 @@ def _load_commands(names=None) -> None:
     """Import the modules that define ``names`` (default: every command)."""
     import importlib
 
-    for module in sorted({COMMANDS[n] for n in (COMMANDS if names is None else names) if n in COMMANDS}):
+    for module in sorted(
+        {COMMANDS[n] for n in (COMMANDS if names is None else names) if n in COMMANDS}
+    ):
         importlib.import_module(f"{__package__}.{module}")
 
 
@@ -180,13 +182,16 @@ class EnvconvGroup(click.Group):
             ctx.exit(3)
 
 
-@click.group(
-    cls=EnvconvGroup, chain=True, context_settings={"help_option_names": ["-h", "--help"]}
-)
+@click.group(cls=EnvconvGroup, chain=True, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="envconv")
 @click.option("-v", "--verbose", count=True, help="More log output (-vv for debug).")
-@click.option("--threads", type=click.IntRange(min=1), default=None, metavar="N",
-              help="Threads for resampling (default: ENVCONV_THREADS, else one per core).")
+@click.option(
+    "--threads",
+    type=click.IntRange(min=1),
+    default=None,
+    metavar="N",
+    help="Threads for resampling (default: ENVCONV_THREADS, else one per core).",
+)
 def cli(verbose: int, threads: int | None) -> None:
     """Convert HDR environment maps between layouts.
 

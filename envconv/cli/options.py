@@ -87,7 +87,15 @@ def parse_mips(ctx, param, value):
     return text if ggx else levels
 
 
-_OCIO_CONFIG = ("ocio_config", click.option("--ocio-config", "ocio_config", metavar="PATH", help="OpenColorIO config (default: $OCIO, else OCIO's built-in ocio://default)."))
+_OCIO_CONFIG = (
+    "ocio_config",
+    click.option(
+        "--ocio-config",
+        "ocio_config",
+        metavar="PATH",
+        help="OpenColorIO config (default: $OCIO, else OCIO's built-in ocio://default).",
+    ),
+)
 
 # Each entry: (library keyword, click decorator).
 READ = [

@@ -19,12 +19,36 @@ def _default_output(input_path: str) -> str:
 
 @cli.command("view")
 @click.argument("input_path", metavar="INPUT")
-@click.option("-o", "--output", "output_path", metavar="HTML", help="Page to write (default: INPUT's name + .view.html, in the current directory).")
+@click.option(
+    "-o",
+    "--output",
+    "output_path",
+    metavar="HTML",
+    help="Page to write (default: INPUT's name + .view.html, in the current directory).",
+)
 @click.option("--open", "open_page", is_flag=True, help="Open the page in the default browser.")
-@click.option("--from", "layout", type=layout_choice(), help="Input layout (default: detect from metadata or aspect).")
-@click.option("--in-convention", "in_convention", metavar="NAME|AXES", help="Convention of the tool that made the input (as for convert).")
-@click.option("--input-colorspace", "input_colorspace", metavar="NAME", help="OCIO colour space of the input.")
-@click.option("--cap", type=click.IntRange(16, 4096), default=1024, show_default=True, help="Height cap of the embedded lat-long (width twice this).")
+@click.option(
+    "--from",
+    "layout",
+    type=layout_choice(),
+    help="Input layout (default: detect from metadata or aspect).",
+)
+@click.option(
+    "--in-convention",
+    "in_convention",
+    metavar="NAME|AXES",
+    help="Convention of the tool that made the input (as for convert).",
+)
+@click.option(
+    "--input-colorspace", "input_colorspace", metavar="NAME", help="OCIO colour space of the input."
+)
+@click.option(
+    "--cap",
+    type=click.IntRange(16, 4096),
+    default=1024,
+    show_default=True,
+    help="Height cap of the embedded lat-long (width twice this).",
+)
 def view_command(input_path, output_path, open_page, layout, in_convention, input_colorspace, cap):  # fmt: skip
     """Write one HTML page (no network needed to view it) to look around inside INPUT: drag
     to turn, wheel to zoom, a mirror, a GGX rough (roughness slider) and a diffuse ball, exposure, ACES tone curve, horizon grid,

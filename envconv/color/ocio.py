@@ -454,7 +454,9 @@ def working_pixels(
     working space as :func:`to_working` converts a map's (for images that are not maps)."""
     config = config_for(ocio_config)
     src = input_colorspace_of(metadata, pixel_type, input_colorspace, ocio_config)
-    return convert_keeping_nonfinite(pixels, src, resolve_colorspace(config, WORKING_COLORSPACE), config)
+    return convert_keeping_nonfinite(
+        pixels, src, resolve_colorspace(config, WORKING_COLORSPACE), config
+    )
 
 
 def to_working(
@@ -481,7 +483,9 @@ def to_working(
         return dataclasses.replace(envmap, metadata=metadata)
     log.info("input colour space %s -> working space %s", src, dst)
     metadata.pop("chromaticities", None)
-    return map_levels(envmap, lambda px: convert_keeping_nonfinite(px, src, dst, config), metadata=metadata)
+    return map_levels(
+        envmap, lambda px: convert_keeping_nonfinite(px, src, dst, config), metadata=metadata
+    )
 
 
 def apply_exposure(pixels: np.ndarray, stops: float) -> np.ndarray:

@@ -28,6 +28,7 @@ __all__ = ["prepare_input", "FIX_MODES", "count_nonfinite", "fix_nonfinite", "cl
 #: Modes of :func:`fix_nonfinite`, OIIO's ``fixNonFinite`` choices.
 FIX_MODES = ("none", "black", "box3", "error")
 
+
 def count_nonfinite(pixels: np.ndarray) -> tuple[int, int]:
     """Count NaN and ±Inf values (all channels). Returns ``(n_nan, n_inf)``.
 
@@ -41,6 +42,7 @@ def count_nonfinite(pixels: np.ndarray) -> tuple[int, int]:
         if np.isfinite(arr.sum()):
             return 0, 0
     return int(np.isnan(arr).sum()), int(np.isinf(arr).sum())
+
 
 def _box3(arr: np.ndarray, bad: np.ndarray) -> np.ndarray:
     ys, xs, cs = np.nonzero(bad)
@@ -58,6 +60,7 @@ def _box3(arr: np.ndarray, bad: np.ndarray) -> np.ndarray:
     out = arr.copy()
     out[ys, xs, cs] = np.where(count > 0, total / np.maximum(count, 1), 0.0)
     return out
+
 
 def fix_nonfinite(pixels: np.ndarray, mode: str = "box3") -> tuple[np.ndarray, int]:
     """Replace NaN and ±Inf values, with the choices of OIIO's ``fixNonFinite``.
@@ -110,6 +113,7 @@ def fix_nonfinite(pixels: np.ndarray, mode: str = "box3") -> tuple[np.ndarray, i
         return np.where(bad, np.float32(0.0), arr), n_bad
     return _box3(arr, bad), n_bad
 
+
 def clamp_negative(pixels: np.ndarray) -> tuple[np.ndarray, int]:
     """Set negative colour values (including -Inf) to 0; NaN, alpha and extras untouched.
 
@@ -135,6 +139,7 @@ def clamp_negative(pixels: np.ndarray) -> tuple[np.ndarray, int]:
 
 def _percent(part: int, whole: int) -> str:
     return f"{100 * part / whole:.3g}%" if whole else "0%"
+
 
 def prepare_input(
     envmap: EnvMap,

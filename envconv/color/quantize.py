@@ -30,6 +30,7 @@ _INT_SCALE = {"uint8": 255.0, "uint16": 65535.0}
 #: Values within this many codes of a code are on the grid: rounding is exact, no dither.
 _ON_GRID = 2e-3
 
+
 def as_image(pixels: Any) -> np.ndarray:
     """``pixels`` as a float32 ``(H, W, C)`` array (no copy when it already is one).
 
@@ -40,9 +41,11 @@ def as_image(pixels: Any) -> np.ndarray:
         raise UsageError(f"expected pixels of shape (H, W, C), got shape {arr.shape}")
     return arr
 
+
 def colour_slice(nchannels: int) -> slice:
     """Slice of the colour channels: channel 0 for grey (C < 3), else the first three."""
     return slice(0, 3) if nchannels >= 3 else slice(0, 1)
+
 
 @dataclass(frozen=True)
 class ClipReport:
@@ -94,6 +97,7 @@ class ClipReport:
             f"{self.pixels_below} below 0); use --exposure STOPS or a float bit depth"
         )
 
+
 def _clip_report(bit_depth: str, above: np.ndarray, below: np.ndarray) -> ClipReport:
     pa, pb = above.any(axis=2), below.any(axis=2)
     return ClipReport(
@@ -106,6 +110,7 @@ def _clip_report(bit_depth: str, above: np.ndarray, below: np.ndarray) -> ClipRe
         int(pb.sum()),
         int((pa | pb).sum()),
     )
+
 
 def _tpdf_noise(start: int, count: int) -> np.ndarray:
     """Deterministic triangular noise in (-1, 1) for flat element indices start..start+count-1.
@@ -120,6 +125,7 @@ def _tpdf_noise(start: int, count: int) -> np.ndarray:
     u1 = (z >> np.uint64(40)).astype(np.float32)
     u2 = (z & np.uint64(0xFFFFFF)).astype(np.float32)
     return (u1 - u2) * np.float32(2.0**-24)
+
 
 def _dither_colour(codes: np.ndarray, scale: float, start: int = 0) -> None:
     """Add TPDF dither in place to colour codes strictly inside (0, scale), row block-wise;
@@ -138,6 +144,7 @@ def _dither_colour(codes: np.ndarray, scale: float, start: int = 0) -> None:
         with np.errstate(invalid="ignore"):  # NaN/Inf codes: never inside, nothing to warn
             inside = (col > 0) & (col < scale) & (np.abs(col - np.rint(col)) > _ON_GRID)
         block[..., sl] = np.where(inside, col + noise, col)
+
 
 def merge_reports(reports: list[ClipReport]) -> ClipReport:
     """One :class:`ClipReport` of an image from the reports of its row blocks."""

@@ -91,7 +91,9 @@ def plan_convert(
                        write.get("output_colorspace"), write.get("bit_depth"), config,
                        write.get("compression"))  # fmt: skip
     channels = list(channels)
-    if resample.get("alpha") and not any(c.upper() == "A" or c.lower() == "alpha" for c in channels):
+    if resample.get("alpha") and not any(
+        c.upper() == "A" or c.lower() == "alpha" for c in channels
+    ):
         channels.append("A")
     max_channels = io.WRITE_FORMATS[os.path.splitext(os.fspath(output_path))[1].lower()][3]
     channels = ["R", "G", "B"] if plan.format == "hdr" else channels[:max_channels]

@@ -114,7 +114,9 @@ def expand_inputs(patterns: Iterable[str]) -> list[str]:
     return list(found)
 
 
-def make_jobs(inputs: Iterable[str | None], pipeline: Pipeline, no_clobber: bool = False) -> list[Job]:
+def make_jobs(
+    inputs: Iterable[str | None], pipeline: Pipeline, no_clobber: bool = False
+) -> list[Job]:
     """One job per input, with relative write paths made absolute against the current
     directory, every write refusing existing files when ``no_clobber``.
 

@@ -281,7 +281,11 @@ def _compression(value: Any) -> str | None:
 def _face_set(value: Any) -> str | None:
     from ..layouts.facesets import is_face_set
 
-    return None if is_face_set(value) else "a face set name (quake, unity-6sided, threejs, godot, unreal)"
+    return (
+        None
+        if is_face_set(value)
+        else "a face set name (quake, unity-6sided, threejs, godot, unreal)"
+    )
 
 
 def _angles(value: Any) -> str | None:
@@ -292,8 +296,10 @@ def _angles(value: Any) -> str | None:
 
 
 def _roughness(value: Any) -> str | None:
-    if isinstance(value, str) and value or (
-        isinstance(value, list) and value and all(_is_number(v) for v in value)
+    if (
+        isinstance(value, str)
+        and value
+        or (isinstance(value, list) and value and all(_is_number(v) for v in value))
     ):
         return None
     return "gltf, filament, unreal, 'R1,R2,...' or a list of numbers"

@@ -78,7 +78,10 @@ def _emergency(signum: int) -> None:
         forget(path)
     if done():
         try:
-            os.write(_state["stderr"], f"{_state['prefix']}{_NAMES.get(signum, 'interrupted')}\n".encode())
+            os.write(
+                _state["stderr"],
+                f"{_state['prefix']}{_NAMES.get(signum, 'interrupted')}\n".encode(),
+            )
         except OSError:
             pass
     os._exit(128 + signum)

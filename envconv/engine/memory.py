@@ -167,7 +167,9 @@ def _address_space_room() -> int | None:
         if limit == resource.RLIM_INFINITY:
             return None
         with open("/proc/self/status") as handle:
-            size = next(int(line.split()[1]) * 1024 for line in handle if line.startswith("VmSize:"))
+            size = next(
+                int(line.split()[1]) * 1024 for line in handle if line.startswith("VmSize:")
+            )
         return max(limit - size, 0)
     except (ImportError, OSError, ValueError, StopIteration):
         return None
@@ -180,7 +182,9 @@ def available() -> tuple[int | None, bool]:
     text = os.environ.get(LIMIT_VARIABLE, "").strip()
     if text:
         return _parse_bytes(text), True
-    found = [v for v in (_meminfo_available(), _cgroup_room(), _address_space_room()) if v is not None]
+    found = [
+        v for v in (_meminfo_available(), _cgroup_room(), _address_space_room()) if v is not None
+    ]
     if not found:
         try:
             found = [os.sysconf("SC_AVPHYS_PAGES") * os.sysconf("SC_PAGE_SIZE")]

@@ -251,7 +251,7 @@ def check_variables(user: dict[str, Any]) -> dict[str, str]:
         if name in resolved:
             return resolved[name]
         if name in trail:
-            cycle = " -> ".join(f"{{{n}}}" for n in (*trail[trail.index(name):], name))
+            cycle = " -> ".join(f"{{{n}}}" for n in (*trail[trail.index(name) :], name))
             raise UsageError(f"variables refer to each other in a cycle: {cycle}")
 
         def substitute(match: re.Match) -> str:

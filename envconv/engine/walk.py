@@ -107,7 +107,11 @@ class Walk:
             if not isinstance(step, Read) and self.input is None and self.source is None:
                 raise UsageError(f"{self._where(step)}: comes before any read")
             getattr(self, f"_{step.kind}")(step)
-            if require_writes and isinstance(step, Resample) and not _written_later(steps, self.index):
+            if (
+                require_writes
+                and isinstance(step, Resample)
+                and not _written_later(steps, self.index)
+            ):
                 raise UsageError(f"{self._where(step)}: this resample is never written; "
                                  "add a write step")  # fmt: skip
         return self.outputs
@@ -189,7 +193,9 @@ class Walk:
     # --- resample and write -----------------------------------------------------------------
 
     def _resample(self, step: Resample) -> None:
-        self._make_output(step.params["to"], step.convert_kwargs(self.rotation), step.params["mips"])
+        self._make_output(
+            step.params["to"], step.convert_kwargs(self.rotation), step.params["mips"]
+        )
 
     def _make_output(self, to: str, kwargs: dict[str, Any], mips: Any) -> None:
         layout = get_layout(to)
@@ -275,8 +281,12 @@ class Walk:
             if latest.space[1] and not options.get("ocio_config"):
                 options["ocio_config"] = latest.space[1]
         files = _output_paths(record.layout, path, record.levels, options.get("faces"))
-        preview = step.target(variables, "preview", self.variables) if step.params["preview"] else None
-        self.targets += [(f, step.params["no_clobber"]) for f in [*files, *([preview] if preview else [])]]
+        preview = (
+            step.target(variables, "preview", self.variables) if step.params["preview"] else None
+        )
+        self.targets += [
+            (f, step.params["no_clobber"]) for f in [*files, *([preview] if preview else [])]
+        ]
         if self.mode == "plan":
             _check_output_settings(path, options)
             files = [*files, *([preview] if preview else [])]

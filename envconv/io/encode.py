@@ -48,6 +48,7 @@ _NO_COLORSPACE_TAG = ("tiff", "jpeg", "dds", "ktx2")
 
 _PRIMARIES = re.compile(r"_(rec709|ap1|ap0)_scene$")
 
+
 @dataclass(frozen=True)
 class OutputPlan:
     """How a map will be stored in one output file (no pixels involved).
@@ -63,6 +64,7 @@ class OutputPlan:
     colorspace: str
     metadata_colorspace: str
     compression: str | None
+
 
 def plan_output(
     path: str | os.PathLike,
@@ -89,6 +91,7 @@ def plan_output(
     return OutputPlan(fmt, ptype, src, dst, color.metadata_name(config, dst),
                       check_compression(fmt, compression))  # fmt: skip
 
+
 @dataclass
 class Encoded:
     """Pixels ready for the file: ``levels`` (level 0 first, dtype of ``plan.pixel_type``),
@@ -100,6 +103,7 @@ class Encoded:
     warnings: list[str]
     #: The warnings known only once the levels were written (lazy levels): call it then.
     finish: Callable[[], list[str]] = list
+
 
 def encode_output(
     envmap: EnvMap,
@@ -171,6 +175,7 @@ def _clip_warnings(where: str, tally: list, shape) -> list[str]:
         warnings.append(f"{where}: {report.message()}")
     return warnings
 
+
 #: Bytes of float32 pixels encoded at a time: colour conversion and quantisation make their
 #: temporaries for one block of rows, never for a whole level (see docs/memory.md).
 ENCODE_BLOCK_BYTES = 1 << 22
@@ -218,7 +223,9 @@ def _encode_level(level: np.ndarray, plan: OutputPlan, config, dither: bool):
     rows = max(1, ENCODE_BLOCK_BYTES // max(1, width * nch * 4))
     codes, reports, n_neg = None, [], 0
     for y0 in range(0, height, rows):
-        done, report, n = _encode_rows(level[y0 : y0 + rows], plan, config, dither, y0 * width * nch)
+        done, report, n = _encode_rows(
+            level[y0 : y0 + rows], plan, config, dither, y0 * width * nch
+        )
         if codes is None:
             codes = np.empty((height, width, nch), done.dtype)
         codes[y0 : y0 + rows] = done

@@ -96,7 +96,6 @@ def read_exr_pixels(path: str, spec):
     return pixels
 
 
-
 #: Scanlines decoded per call for half data: a multiple of every compression's block (1, 16,
 #: 32 or 256 lines), small enough that the half copy of a band is noise beside the image.
 HALF_BAND_ROWS = 256

@@ -73,6 +73,7 @@ def _candidates(layout: str | None) -> list[_Candidate]:
 
 def _same(a: _Candidate, b: _Candidate) -> bool:
     """Same files holding the same faces the same way (envconv and three.js)."""
+
     def faces(c):
         return c.face_set.transforms if c.face_set is not None else None
 
@@ -103,7 +104,9 @@ def find_face_files(template: str, layout: str | None = None, faces=None) -> Fac
     listing: dict = {}
     if faces is not None:
         if layout not in (None, _CUBE):
-            raise LayoutError(f"face set {get_face_set(faces).name} applies to {_CUBE}, not {layout}")
+            raise LayoutError(
+                f"face set {get_face_set(faces).name} applies to {_CUBE}, not {layout}"
+            )
         face_set = get_face_set(faces)
         return FaceFiles(_CUBE, face_set, [part_path(template, n, listing) for n in face_set.names])
     complete, partial = [], []

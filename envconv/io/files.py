@@ -128,7 +128,9 @@ class FileHeader:
         names: list[str] = list(self.first.channels)
         for index in self.chosen[1:]:
             part = self.parts[index]
-            names += [c if c.startswith(f"{part.name}.") else f"{part.name}.{c}" for c in part.channels]
+            names += [
+                c if c.startswith(f"{part.name}.") else f"{part.name}.{c}" for c in part.channels
+            ]
         return tuple(names)
 
     @property
@@ -302,7 +304,9 @@ def place_in_display(pixels: np.ndarray, display, data) -> tuple[np.ndarray, np.
     image = np.zeros((height, width, pixels.shape[2]), np.float32)
     valid = np.zeros((height, width), np.float32)
     if left < right and top < bottom:
-        image[top - dy : bottom - dy, left - dx : right - dx] = pixels[top - y : bottom - y, left - x : right - x]
+        image[top - dy : bottom - dy, left - dx : right - dx] = pixels[
+            top - y : bottom - y, left - x : right - x
+        ]
         valid[top - dy : bottom - dy, left - dx : right - dx] = 1.0
     return image, (None if valid.all() else valid)
 

@@ -79,6 +79,7 @@ COMPRESSIONS = {
     "tiff": ("none", "lzw", "zip:", "packbits"),
 }  # fmt: skip
 
+
 def check_compression(fmt: str, compression: str | None) -> str | None:
     """Validate ``compression`` for OIIO format ``fmt``; return it lower-cased (None: default).
 

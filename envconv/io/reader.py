@@ -98,10 +98,13 @@ def read(
     pixels, channels, parts = _with_alpha(image.pixels, header, image.valid)
     metadata, valid = header.metadata, image.valid
     found, guard, _ = place_image(header.width, header.height, metadata, layout, pixels, level)
-    if found.name == "latlong" and metadata.get("oiio:sampleborder") and (
-        "envconv:layout" not in metadata  # envconv's own files use pixel centres
+    if (
+        found.name == "latlong"
+        and metadata.get("oiio:sampleborder")
+        and (
+            "envconv:layout" not in metadata  # envconv's own files use pixel centres
+        )
     ):  # edge-aligned samples, as OpenEXR's ImfEnvmap: see resample_edge_aligned
-
         pixels = resample_edge_aligned(pixels)
         valid = None if valid is None else resample_edge_aligned(valid[:, :, None])[:, :, 0]
     envmap = EnvMap(pixels, found, guard, channels, _content_metadata(metadata),
@@ -120,7 +123,9 @@ def _check_memory(path: str, level: int, part, files: int = 1) -> None:
     need = memory.estimate_read(header.width, header.height, channels, header.pixel_type, holes)
     if files > 1:  # every file's image, then the mosaic they are joined into
         need = 2 * files * (need - memory.SLACK) + memory.SLACK
-    memory.check(need, f"reading {path}", 0, "read a lower --level or a smaller file, or free memory")
+    memory.check(
+        need, f"reading {path}", 0, "read a lower --level or a smaller file, or free memory"
+    )
 
 
 def _with_alpha(pixels: np.ndarray, header: FileHeader, valid: np.ndarray | None):
@@ -160,8 +165,9 @@ def read_header(path: str | os.PathLike, level: int = 0, part: str | None = None
     return header.width, header.height, channels, header.metadata
 
 
-def _read_multi(template: str, layout: str | None, level: int, part: str | None,
-                faces=None) -> EnvMap:
+def _read_multi(
+    template: str, layout: str | None, level: int, part: str | None, faces=None
+) -> EnvMap:
     """The parts of ``template`` side by side in face order, each cube face turned from its
     face set's orientation into envconv's; holes (and an ``A``) as in :func:`read`."""
     from .face_files import find_face_files
@@ -186,7 +192,9 @@ def _read_multi(template: str, layout: str | None, level: int, part: str | None,
 
         pixels = to_envconv(files.face_set, pixels)
         if holes:
-            valids = [v[:, :, 0] for v in to_envconv(files.face_set, [v[:, :, None] for v in valids])]
+            valids = [
+                v[:, :, 0] for v in to_envconv(files.face_set, [v[:, :, None] for v in valids])
+            ]
     header = images[0].header
     mosaic = np.concatenate(pixels, axis=1)
     valid = np.concatenate(valids, axis=1) if holes else None
@@ -226,6 +234,7 @@ def _edge_weights(n: int) -> tuple[np.ndarray, np.ndarray]:
     x = (np.arange(n, dtype=np.float64) + 0.5) * (n - 1) / n
     i0 = np.minimum(np.floor(x).astype(np.intp), n - 2)
     return i0, (x - i0).astype(np.float32)
+
 
 def resample_edge_aligned(pixels: np.ndarray) -> np.ndarray:
     """Resample an image with edge-aligned samples onto the pixel-centre grid, same size.

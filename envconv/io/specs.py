@@ -71,7 +71,9 @@ def level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, le
         pixels = _take(pixels, [0, 0, 0])
         channels = ["R", "G", "B"]
     nch = pixels.shape[2]
-    alpha = next((k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None)
+    alpha = next(
+        (k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None
+    )
     attributes: list[tuple[str, Any]] = []
     if alpha is not None and fmt in ("png", "tiff"):
         # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or

@@ -118,7 +118,11 @@ def write(
     encoded = encode_output(envmap, path, output_colorspace, bit_depth, dither, ocio_config,
                             compression, lazy)  # fmt: skip
     _report(encoded.warnings, warnings)
-    levels, bit_depth, compression = encoded.levels, encoded.plan.pixel_type, encoded.plan.compression
+    levels, bit_depth, compression = (
+        encoded.levels,
+        encoded.plan.pixel_type,
+        encoded.plan.compression,
+    )
     envmap = replace(envmap, metadata=encoded.metadata, levels=None)
     if encoded.plan.format in ("dds", "ktx2"):
         return [_write_container(envmap, os.fspath(path), encoded.plan.format, levels)]
@@ -206,7 +210,9 @@ def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
     if not layout.multi_file:
         return [pixels]
     cw, ch = pixels.shape[1] // layout.columns, pixels.shape[0] // layout.rows
-    cells = [pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells]
+    cells = [
+        pixels[c.row * ch : (c.row + 1) * ch, c.col * cw : (c.col + 1) * cw] for c in layout.cells
+    ]
     if faces is None:
         return cells
     from ..layouts.facesets import from_envconv
@@ -242,7 +248,13 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
             mode = "Create"
             if len(images) > 1:
                 set_mip_attributes(spec, fmt)
-                mode = "Create" if k == 0 else "AppendMIPLevel" if fmt == "openexr" else "AppendSubimage"
+                mode = (
+                    "Create"
+                    if k == 0
+                    else "AppendMIPLevel"
+                    if fmt == "openexr"
+                    else "AppendSubimage"
+                )
             writes.append((spec, mode, image.data))
     _run_writes(temp, target, writes)
 

@@ -27,8 +27,16 @@ from . import (
 )
 from .base import Cell, Layout
 
-__all__ = ["LAYOUTS", "ALIASES", "FAMILIES", "Layout", "Cell", "get_layout", "layout_names",
-           "resolve_layout_name"]
+__all__ = [
+    "LAYOUTS",
+    "ALIASES",
+    "FAMILIES",
+    "Layout",
+    "Cell",
+    "get_layout",
+    "layout_names",
+    "resolve_layout_name",
+]
 
 _MODULE_LAYOUTS = (
     latlong.LAYOUT,
@@ -78,7 +86,9 @@ def resolve_layout_name(name: str) -> str:
     if key in ALIASES:
         return ALIASES[key]
     if key in FAMILIES:
-        raise LayoutError(f"{name!r} names several layouts; choose one of {', '.join(FAMILIES[key])}")
+        raise LayoutError(
+            f"{name!r} names several layouts; choose one of {', '.join(FAMILIES[key])}"
+        )
     close = difflib.get_close_matches(key, [*LAYOUTS, *ALIASES], n=3)
     close = list(dict.fromkeys(ALIASES.get(c, c) for c in close))
     hint = "; did you mean " + " or ".join(f"'{c}'" for c in close) + "?" if close else ""

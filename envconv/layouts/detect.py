@@ -109,7 +109,9 @@ def _aspect_list() -> str:
     for layout in LAYOUTS.values():
         if not layout.multi_file:
             w, h = layout.image_size(1, 0)
-            by_aspect.setdefault(f"{w // math.gcd(w, h)}:{h // math.gcd(w, h)}", []).append(layout.name)
+            by_aspect.setdefault(f"{w // math.gcd(w, h)}:{h // math.gcd(w, h)}", []).append(
+                layout.name
+            )
     return ", ".join(f"{aspect} {' or '.join(names)}" for aspect, names in by_aspect.items())
 
 
@@ -151,13 +153,19 @@ def _ratio(w: int, h: int) -> str:
     return f"width:height = {w}:{h}"
 
 
-def misfit_message(layout: Layout, width: int, height: int, guard: int = 0, origin: str = "given by --from") -> str:
+def misfit_message(
+    layout: Layout, width: int, height: int, guard: int = 0, origin: str = "given by --from"
+) -> str:
     """Why a ``width`` × ``height`` image is not ``layout`` (which ``origin`` named), which
     sizes would be, and what to do."""
     w1, h1 = layout.image_size(1, 0)
     if guard:
         a = "N" if layout.aspect == 1 else f"{layout.aspect}N"
-        grid = f"{layout.columns} × {layout.rows} cells of " if layout.columns * layout.rows > 1 else ""
+        grid = (
+            f"{layout.columns} × {layout.rows} cells of "
+            if layout.columns * layout.rows > 1
+            else ""
+        )
         rule = f"{grid}({a}+{2 * guard}) × (N+{2 * guard}) pixels with its {guard}-pixel guard"
     else:
         rule = _ratio(w1, h1)

@@ -108,8 +108,17 @@ _FACE_SET_LIST = (
         "Quake II/III, ioquake3, Half-Life (GoldSrc), Source, Cube 2: Sauerbraten, DarkPlaces",
         ("lf", "rt", "up", "dn", "ft", "bk"),
         (_I, _I, (0, -1, 1, 0), (0, 1, -1, 0), _I, _I),
-        aliases=("source", "cube2", "halflife", "goldsrc", "quake2", "quake3", "ioquake3",
-                 "sauerbraten", "darkplaces"),  # fmt: skip
+        aliases=(
+            "source",
+            "cube2",
+            "halflife",
+            "goldsrc",
+            "quake2",
+            "quake3",
+            "ioquake3",
+            "sauerbraten",
+            "darkplaces",
+        ),  # fmt: skip
         file_order=("rt", "bk", "lf", "ft", "up", "dn"),
     ),
     FaceSet(

@@ -67,6 +67,7 @@ __all__ = ["convert", "default_size", "auto_samples", "source_rips", "rip_row_ca
 
 log = logging.getLogger(__name__)
 
+
 def convert(
     envmap: EnvMap,
     to: Layout | str,
@@ -149,8 +150,23 @@ def convert(
     return _resample(envmap, to, **options)
 
 
-def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, roughness,
-              irradiance, in_convention, out_convention, up, axes) -> EnvMap:
+def _resample(
+    envmap,
+    to,
+    size,
+    samples,
+    filter,
+    rotate,
+    guard,
+    alpha,
+    mips,
+    roughness,
+    irradiance,
+    in_convention,
+    out_convention,
+    up,
+    axes,
+) -> EnvMap:
     """:func:`convert` of a map without holes or parts."""
     to = get_layout(to)
     mips, ggx = _mip_filter(mips)
@@ -276,8 +292,9 @@ def _resample(envmap, to, size, samples, filter, rotate, guard, alpha, mips, rou
     )
 
 
-def _level0_unused(envmap: EnvMap, to: Layout, size: int, guard: int, irradiance: bool,
-                   needs_coverage: bool, mips) -> bool:
+def _level0_unused(
+    envmap: EnvMap, to: Layout, size: int, guard: int, irradiance: bool, needs_coverage: bool, mips
+) -> bool:
     """True when nothing reads the resampled level 0: an irradiance map without alpha or chain
     whose convolution is summed from the source itself (binned, or resampled onto its cube)."""
     if not irradiance or needs_coverage or mips:

@@ -56,7 +56,10 @@ def convert_with_holes(envmap: EnvMap, to, resample, **kwargs) -> EnvMap:
     out = convert(carrier, to, **kwargs)
     v = out.channels.index(VALID_CHANNEL)
     alpha = out.alpha_index
-    levels = [_fill_holes(level, v, alpha, bool(kwargs.get("alpha"))) for level in out.levels or [out.pixels]]
+    levels = [
+        _fill_holes(level, v, alpha, bool(kwargs.get("alpha")))
+        for level in out.levels or [out.pixels]
+    ]
     channels = tuple(c for k, c in enumerate(out.channels) if k != v)
     result = dataclasses.replace(out, pixels=levels[0], channels=channels,
                                  levels=levels if out.levels is not None else None)  # fmt: skip

@@ -215,8 +215,17 @@ def _largest_pixel_angle(source: EnvMap, grid: int = 128) -> float:
     return float(np.arccos(cos).max() / 0.98)  # the corners were 0.49 of a pixel out, not 0.5
 
 
-def _pyramid(source: EnvMap, to: Layout, size: int, guard: int, rot, level0, alphas, cap=None,
-             bin_source=False):
+def _pyramid(
+    source: EnvMap,
+    to: Layout,
+    size: int,
+    guard: int,
+    rot,
+    level0,
+    alphas,
+    cap=None,
+    bin_source=False,
+):
     """(pyramid, p, channels, rotation) for the prefilter: with ``bin_source`` (the irradiance
     pyramid) the source binned into a p-cube where :func:`_bin_plan` allows, else the cube
     faces (6, p, p, C) of the chain's level 0 or of a resample, summed into the core's pyramid;

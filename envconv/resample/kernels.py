@@ -128,13 +128,20 @@ def _run_watched(call, total: int, watch: bool = True) -> None:
         raise failure[0]
     if watcher is not None:
         watcher(int(progress[0]), total)  # the end, however fast the kernel was
+
+
 def _c(array, dtype) -> np.ndarray:
     return np.ascontiguousarray(array, dtype)
 
 
 def _geo(geometry):
     geo, cell_face, cell_turns, face_cell = geometry
-    return _c(geo, np.int64), _c(cell_face, np.int32), _c(cell_turns, np.int32), _c(face_cell, np.int32)
+    return (
+        _c(geo, np.int64),
+        _c(cell_face, np.int32),
+        _c(cell_turns, np.int32),
+        _c(face_cell, np.int32),
+    )
 
 
 def resample_rows(
@@ -253,7 +260,12 @@ def dir_density(geometry, dirs) -> np.ndarray:
 
 def _flat_points(face, a, b):
     face, a, b = np.broadcast_arrays(np.asarray(face), np.asarray(a, float), np.asarray(b, float))
-    return face.shape, _c(face.ravel(), np.int32), _c(a.ravel(), np.float64), _c(b.ravel(), np.float64)
+    return (
+        face.shape,
+        _c(face.ravel(), np.int32),
+        _c(a.ravel(), np.float64),
+        _c(b.ravel(), np.float64),
+    )
 
 
 def face_to_dir(family: int, face, a, b) -> np.ndarray:
@@ -321,8 +333,9 @@ def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
     return pyramid
 
 
-def ibl_pyramid_binned(latlong: np.ndarray, to_pyramid: np.ndarray, p: int,
-                       sub: int = 1) -> np.ndarray | None:
+def ibl_pyramid_binned(
+    latlong: np.ndarray, to_pyramid: np.ndarray, p: int, sub: int = 1
+) -> np.ndarray | None:
     """:func:`ibl_pyramid` of a p-cube made by binning every pixel of a lat-long (H, 2H, C)
     float32 (no guard ring), as ``sub`` × ``sub`` points, into the level-0 texel of its
     direction turned by ``to_pyramid`` (3 × 3): energy exact and a one-pixel sun kept at its
@@ -337,8 +350,9 @@ def ibl_pyramid_binned(latlong: np.ndarray, to_pyramid: np.ndarray, p: int,
     return pyramid if done else None
 
 
-def ibl_pyramid_binned_any(pixels: np.ndarray, geometry, to_pyramid: np.ndarray, p: int,
-                           sub: int, delta: float) -> np.ndarray | None:
+def ibl_pyramid_binned_any(
+    pixels: np.ndarray, geometry, to_pyramid: np.ndarray, p: int, sub: int, delta: float
+) -> np.ndarray | None:
     """:func:`ibl_pyramid_binned` for a map of any layout (``geometry`` from
     :func:`envconv.layouts.geometry.kernel_geometry`): each owned pixel as ``sub`` × ``sub`` points
     (16 × 16 where only part of it is owned); ``delta`` bounds half a point's diagonal

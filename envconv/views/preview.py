@@ -302,7 +302,8 @@ def contact_sheet(envmap: EnvMap, exposure: float = 0.0, view: str = "tone",
     def place(img, names, x, y, title):
         draw_text(sheet, title, x, y, shade, 2)
         sheet[y + label : y + label + img.shape[0], x : x + img.shape[1]] = tone_map(
-            img, names, stops, auto=False, view=view)
+            img, names, stops, auto=False, view=view
+        )
 
     own_names = envmap.channels or None
     place(thumb, own_names, pad, pad, f"{envmap.layout.name.upper()} (AS STORED)"

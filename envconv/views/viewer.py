@@ -38,7 +38,16 @@ import numpy as np
 
 from ..envmap import EnvMap
 
-__all__ = ["CAP_HEIGHT", "SHAPER", "GGX_LEVELS", "ggx_page_levels", "rgbe_encode", "rgbe_decode", "page_presets", "build_page"]
+__all__ = [
+    "CAP_HEIGHT",
+    "SHAPER",
+    "GGX_LEVELS",
+    "ggx_page_levels",
+    "rgbe_encode",
+    "rgbe_decode",
+    "page_presets",
+    "build_page",
+]
 
 log = logging.getLogger(__name__)
 
