@@ -26,6 +26,7 @@ from ..envmap import EnvMap
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from ..layouts.detect import place_image
+from ..layouts.grids import to_centres
 from .files import FileHeader, _open_input, read_file, read_file_header, read_image, read_pixel_type
 
 __all__ = ["read", "read_unplaced", "read_image", "read_header", "read_pixel_type", "mip_levels",
@@ -39,7 +40,7 @@ _DROP_NAMES = {"envmap", "compression", "planarconfig", "Orientation", "XResolut
                "YResolution", "ResolutionUnit", "PixelAspectRatio", "screenWindowCenter",
                "screenWindowWidth", "tile_width", "tile_height", "Software", "textureformat",
                "name"}  # fmt: skip
-_KEEP_NAMES = {"oiio:ColorSpace"}
+_KEEP_NAMES = {"oiio:ColorSpace", "envconv:grid"}  # the grid: see envconv.layouts.grids
 
 
 def read(
@@ -229,13 +230,6 @@ def _content_metadata(metadata: dict[str, Any]) -> dict[str, Any]:
     }
 
 
-def _edge_weights(n: int) -> tuple[np.ndarray, np.ndarray]:
-    """For centre k of n: left sample index and weight of the right one, on an edge grid."""
-    x = (np.arange(n, dtype=np.float64) + 0.5) * (n - 1) / n
-    i0 = np.minimum(np.floor(x).astype(np.intp), n - 2)
-    return i0, (x - i0).astype(np.float32)
-
-
 def resample_edge_aligned(pixels: np.ndarray) -> np.ndarray:
     """Resample an image with edge-aligned samples onto the pixel-centre grid, same size.
 
@@ -246,7 +240,8 @@ def resample_edge_aligned(pixels: np.ndarray) -> np.ndarray:
     centre at ((i + 0.5) / W, (j + 0.5) / H), i.e. at file position (i + 0.5)(W − 1)/W.
     Each output value is the linear interpolation of the two nearest file samples, rows and
     columns separably (exact for constants and for functions linear in u and v). An axis of
-    one sample is left as it is.
+    one sample is left as it is. This is :func:`envconv.layouts.grids.to_centres` of the
+    ``edges`` grid.
 
     Parameters
     ----------
@@ -262,14 +257,4 @@ def resample_edge_aligned(pixels: np.ndarray) -> np.ndarray:
     >>> [round(float(x), 4) for x in resample_edge_aligned(px)[0, :, 0]]  # u = 1/6, 1/2, 5/6
     [0.3333, 1.0, 1.6667]
     """
-    out = np.asarray(pixels, np.float32)
-    height, width = out.shape[:2]
-    if height > 1:
-        j0, t = _edge_weights(height)
-        t = t[:, None, None]
-        out = out[j0] * (1 - t) + out[j0 + 1] * t
-    if width > 1:
-        i0, t = _edge_weights(width)
-        t = t[None, :, None]
-        out = out[:, i0] * (1 - t) + out[:, i0 + 1] * t
-    return np.ascontiguousarray(out, np.float32)
+    return to_centres(pixels, "edges")
