@@ -273,8 +273,19 @@ def test_sampleborder_latlong_is_resampled_to_pixel_centres(tmp_path):
 def test_envconvs_own_latlong_exr_is_not_resampled(tmp_path):
     px = smooth_linear()
     io.write(EnvMap(px, "latlong"), tmp_path / "own.exr", bit_depth="float")
-    assert read_raw(tmp_path / "own.exr")[1].get("oiio:sampleborder") == 1
+    # The file says its samples are centred (envconv.io.exr_header), and OIIO reads it so.
+    assert read_raw(tmp_path / "own.exr")[1].get("oiio:sampleborder") == 0
     np.testing.assert_array_equal(io.read(tmp_path / "own.exr").pixels, px)
+
+
+def test_older_envconv_latlong_exr_is_not_resampled(tmp_path):
+    """A lat-long from an envconv before oiio:sampleborder = 0 was stored: OIIO reports 1 (its
+    envmap default), and the envconv:layout tag says the samples are envconv's centres."""
+    px = smooth_linear()
+    tags = {"textureformat": "LatLong Environment", "envconv:layout": "latlong"}
+    write_plain(tmp_path / "old.exr", px, tags)
+    assert read_raw(tmp_path / "old.exr")[1].get("oiio:sampleborder") == 1
+    np.testing.assert_array_equal(io.read(tmp_path / "old.exr").pixels, px)
 
 
 def test_resample_edge_aligned_is_exact_for_linear_functions():

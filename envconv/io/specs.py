@@ -13,6 +13,8 @@ from typing import Any, NamedTuple
 import numpy as np
 
 from ..envmap import EnvMap
+from ..layouts.grids import CENTRES, tagged_grid
+from .exr_header import PLACEHOLDER
 from .files import _oiio
 from .formats import choose_pixel_type, format_of
 
@@ -119,10 +121,13 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
     from .. import __version__
 
     tags: list[tuple[str, Any]] = []
+    grid = tagged_grid(envmap.metadata)
     if fmt in _DESCRIPTION_FORMATS:
         words = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
         if face is not None:
             words["face"] = face
+        if grid != CENTRES:
+            words["grid"] = grid
         text = " ".join(f"envconv:{k}={v}" for k, v in words.items())
         kept = str(envmap.metadata.get("ImageDescription", "")).strip()
         tags.append(("ImageDescription", f"{kept} {text}".strip()))
@@ -140,12 +145,24 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
     if stamp is not None and "DateTime" not in envmap.metadata:
         tags.append(("DateTime", stamp))
     if fmt == "openexr" and envmap.guard == 0:
-        # OIIO writes OpenEXR's typed ``envmap`` attribute from ``textureformat``; a plain
-        # "envmap" string would be stored with the wrong type and make the file unreadable.
-        if envmap.layout.name == "latlong":
-            tags.append(("textureformat", "LatLong Environment"))
-        elif envmap.layout.name == "cube-exr":
-            tags.append(("textureformat", "CubeFace Environment"))
+        tags += _envmap_tags(envmap.layout.name, grid)
+    return tags
+
+
+def _envmap_tags(layout: str, grid: str) -> list[tuple[str, Any]]:
+    """OpenEXR's ``envmap`` attribute (through OIIO's ``textureformat``: a plain "envmap"
+    string would be stored with the wrong type and make the file unreadable) and where its
+    samples sit. OIIO reads ``envmap`` as samples on the edges (OpenEXR's ImfEnvmap), so a map
+    on pixel centres also gets ``oiio:sampleborder = 0``, stored under a placeholder name
+    (:mod:`envconv.io.exr_header`). A Mitsuba grid (rows on the edges, columns centred) is
+    neither, so it is not tagged as an envmap at all."""
+    if layout == "cube-exr":
+        return [("textureformat", "CubeFace Environment"), (PLACEHOLDER, 0)]
+    if layout != "latlong" or grid == "edge-rows":
+        return []
+    tags: list[tuple[str, Any]] = [("textureformat", "LatLong Environment")]
+    if grid == CENTRES:
+        tags.append((PLACEHOLDER, 0))
     return tags
 
 

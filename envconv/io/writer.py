@@ -18,6 +18,7 @@ from ..envmap import EnvMap
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from .chatter import library_output
+from .exr_header import PLACEHOLDER, store_sampleborder
 from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, format_of
 from .specs import LevelImage, image_spec, level_image, set_mip_attributes
@@ -257,6 +258,12 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
                 )
             writes.append((spec, mode, image.data))
     _run_writes(temp, target, writes)
+    if fmt == "openexr" and any(
+        spec.getattribute(PLACEHOLDER) is not None
+        for specs, _, _ in writes
+        for spec in (specs if isinstance(specs, list) else [specs])
+    ):
+        store_sampleborder(temp, target)  # oiio:sampleborder = 0: samples at pixel centres
 
 
 def _part_writes(target, pixels, envmap, face, bit_depth, compression, level):

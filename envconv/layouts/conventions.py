@@ -27,7 +27,12 @@ cmft, Unity, CubeMapGen and HDRShop. The relations, from conventions-in-the-wild
 preset             layouts                           M (as AXES)            notes
 =================  ================================  =====================  ========================
 ``envconv``        all                               ``x,y,z``              identity (also ``none``)
-``openexr``        latlong, cube-exr                 ``x,y,z``              ImfEnvmap, USD, Mitsuba
+``openexr``        latlong, cube-exr                 ``x,y,z``              ImfEnvmap frame, USD
+``openexr-edges``  latlong                           ``x,y,z`` + ``edges``  ImfEnvmap samples on
+                                                     grid                   the edges (exrenvmap,
+                                                                            maketx --envlatl)
+``mitsuba``        latlong                           ``x,y,z`` + ``edge-    Mitsuba 3 ``envmap``:
+                                                     rows`` grid            rows on the poles
 ``openexr``        cube-faces, cube-hstrip/vstrip    ``x,y,z`` + cell remap OpenEXR faces (exrenvmap
                                                                             ``%`` files): see below
 ``blender``        latlong                           ``z,y,-x``             centre +X_b, top +Z_b
@@ -58,6 +63,8 @@ preset             layouts                           M (as AXES)            note
 =================  ================================  =====================  ========================
 
 A preset rejects every other layout with a one-line :class:`~envconv.errors.LayoutError`.
+``mitsuba`` and ``openexr-edges`` also name a sample grid (:mod:`envconv.layouts.grids`): the
+map is resampled onto envconv's pixel centres when read and onto the tool's grid when written.
 Each preset also names its tool's world frame F (:func:`world_frame`, the map above: envconv's
 direction = F · tool's direction), which ``envconv preview --convention`` labels views with.
 
@@ -100,6 +107,7 @@ import numpy as np
 
 from ..errors import LayoutError, UsageError
 from . import Layout, get_layout
+from .grids import CENTRES
 
 __all__ = [
     "Convention",
@@ -135,27 +143,38 @@ class Convention:
     size_rule : str or None
         How the tool sizes its files when no size is given: ``"latlong-width"`` (N is the
         width of the lat-long envconv would make from the source), or None for envconv's rule.
+    grid : str
+        Where the tool's lat-long samples sit (:data:`envconv.layouts.grids.GRIDS`):
+        ``"centres"`` (envconv's pixel centres), ``"edge-rows"`` or ``"edges"``.
     """
 
     matrix: np.ndarray
     remap: tuple[tuple[int, int], ...] | None = None
     name: str = _IDENTITY
     size_rule: str | None = None
+    grid: str = CENTRES
 
     @property
     def is_identity(self) -> bool:
-        return self.remap is None and bool(np.array_equal(self.matrix, np.eye(3)))
+        return (
+            self.remap is None
+            and self.grid == CENTRES
+            and bool(np.array_equal(self.matrix, np.eye(3)))
+        )
 
 
 @dataclass(frozen=True)
 class Preset:
-    """A named convention: per-layout AXES strings, cell remaps and size rules, and its tool."""
+    """A named convention: per-layout AXES strings, cell remaps, size rules and sample grids,
+    and its tool."""
 
     name: str
     tool: str
     layouts: dict[str, str]
     remaps: dict[str, tuple[tuple[int, int], ...]] = field(default_factory=dict)
     sizes: dict[str, str] = field(default_factory=dict)
+    #: Layout → sample grid other than envconv's centres (:mod:`envconv.layouts.grids`).
+    grids: dict[str, str] = field(default_factory=dict)
     #: The tool's world frame as AXES: envconv's direction = F · (tool's direction).
     frame: str = "x,y,z"
 
@@ -167,7 +186,7 @@ _PRESET_LIST = (
     Preset("envconv", "envconv itself: OpenEXR/USD frame, GL/D3D/KTX cube faces", {}),
     Preset(
         "openexr",
-        "OpenEXR ImfEnvmap / exrenvmap, USD DomeLight, Mitsuba 3, OIIO y-up",
+        "OpenEXR ImfEnvmap / exrenvmap frame, USD DomeLight, OIIO y-up (pixel centres)",
         {
             "latlong": _IDENTITY,
             "cube-exr": _IDENTITY,
@@ -177,6 +196,18 @@ _PRESET_LIST = (
         },
         {"cube-faces": _EXR_FACES, "cube-hstrip": _EXR_FACES, "cube-vstrip": _EXR_FACES},
     ),  # fmt: skip
+    Preset(
+        "openexr-edges",
+        "OpenEXR ImfEnvmap grid (exrenvmap, maketx --envlatl): samples on the image's edges",
+        {"latlong": _IDENTITY},
+        grids={"latlong": "edges"},
+    ),
+    Preset(
+        "mitsuba",
+        "Mitsuba 3 envmap emitter (Y-up RH): rows on the poles, columns at pixel centres",
+        {"latlong": _IDENTITY},
+        grids={"latlong": "edge-rows"},
+    ),
     Preset(
         "blender",
         "Blender Cycles Environment Texture (Z-up RH): equirectangular and mirror ball",
@@ -257,7 +288,8 @@ PRESETS: dict[str, Preset] = {p.name: p for p in _PRESET_LIST}
 _ALIASES = {
     "none": "envconv", "identity": "envconv", "usd": "openexr", "filament": "cmft",
     "pbrt-v4": "pbrt", "rtxgi": "ddgi", "rtxgi-z-up": "ddgi-z-up", "three.js": "threejs",
-    "three": "threejs",
+    "three": "threejs", "mitsuba3": "mitsuba", "exrenvmap": "openexr-edges",
+    "maketx": "openexr-edges",
 }  # fmt: skip
 
 
@@ -369,6 +401,7 @@ def resolve_convention(spec, layout: Layout | str) -> Convention:
         preset.remaps.get(layout.name),
         name,
         preset.sizes.get(layout.name),
+        preset.grids.get(layout.name, CENTRES),
     )
 
 

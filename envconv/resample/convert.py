@@ -61,6 +61,7 @@ from .options import (
     check_samples,
     default_size,
 )
+from .regrid import check_output_grid, output_on_grid, source_on_centres
 
 __all__ = ["convert", "default_size", "auto_samples", "source_rips", "rip_row_cap",
            "memory_needed", "FILTERS", "MAX_SAMPLES"]  # fmt: skip
@@ -172,6 +173,9 @@ def _resample(
     mips, ggx = _mip_filter(mips)
     cin = resolve_convention(in_convention, envmap.layout)
     cout = resolve_convention(out_convention, to)
+    # Sample grids (mitsuba, openexr-edges): resampled on envconv's centres (.regrid).
+    envmap = source_on_centres(envmap, None if in_convention is None else cin)
+    check_output_grid(cout, mips, guard)
     if cout.remap is not None and mips:
         raise UsageError(f"out_convention {cout.name} moves cells; it cannot be used with mips")
     if cin.remap is not None:
@@ -281,6 +285,7 @@ def _resample(
     out = chain[0][0]
     if cout.remap is not None:
         out = apply_remap(to, out, guard_px, cout.remap, inverse=True)
+    out, metadata = output_on_grid(out, cout, metadata)
     return EnvMap(
         out,
         to,

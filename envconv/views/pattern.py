@@ -28,6 +28,7 @@ from ..errors import UsageError
 from ..layouts import get_layout
 from ..layouts.conventions import apply_remap, resolve_convention
 from ..layouts.geometry import uv_to_dir
+from ..resample.regrid import check_output_grid, output_on_grid
 
 __all__ = ["FONT", "LABELS", "GLYPH_UNIT", "pattern", "label_mask", "render_pattern"]
 
@@ -169,6 +170,7 @@ def render_pattern(
     if guard_px < 0:
         raise UsageError(f"guard must be a non-negative integer or 'fill', got {guard!r}")
     conv = resolve_convention(convention, layout)
+    check_output_grid(conv, None, guard)
     width, height = layout.image_size(size, guard_px)
     colour = np.zeros((height, width, 3))
     count = np.zeros((height, width))
@@ -189,4 +191,6 @@ def render_pattern(
         pixels = np.concatenate([pixels, (valid / samples**2)[..., None]], axis=2)
         channels += ("A",)
     pixels = apply_remap(layout, pixels, guard_px, conv.remap, inverse=True)
-    return EnvMap(pixels.astype(np.float32), layout, guard=guard_px, channels=channels)
+    pixels, metadata = output_on_grid(pixels, conv, {})  # a tool's own sample grid (mitsuba)
+    return EnvMap(pixels.astype(np.float32), layout, guard=guard_px, channels=channels,
+                  metadata=metadata)  # fmt: skip
