@@ -31,7 +31,7 @@ __all__ = ["pattern_command"]
     "--out-convention",
     "convention",
     metavar="NAME|AXES",
-    help="Draw for another tool's convention (blender, cmft, skylibs, unity, unreal, ffmpeg, ...), or with --to cube-faces a skybox face set (quake, unity-6sided, threejs, godot, unreal).",
+    help="Draw for another tool's convention (blender, cmft, skylibs, unity, unreal, ffmpeg, mitsuba, ...), or with --to cube-faces a skybox face set (quake, unity-6sided, threejs, godot, unreal).",
 )
 @click.option(
     "--guard",
