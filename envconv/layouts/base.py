@@ -21,6 +21,21 @@ import numpy as np
 
 from ..errors import LayoutError
 
+# Geometry family codes: the native core's own (src/core/layouts.h, exported by
+# src/core/module.cpp), which its kernels dispatch on; never restated here.
+from ..resample.kernels import (
+    DISK_FAMILIES,
+    FAMILY_ANGULAR,
+    FAMILY_CUBE_EXR,
+    FAMILY_CUBE_GL,
+    FAMILY_EQUAL_AREA,
+    FAMILY_LATLONG,
+    FAMILY_OCTAHEDRAL,
+    FAMILY_PARABOLOID,
+    FAMILY_SPHERE,
+    FAMILY_TENNISBALL,
+)
+
 __all__ = [
     "Cell",
     "Layout",
@@ -33,21 +48,8 @@ __all__ = [
     "FAMILY_TENNISBALL",
     "FAMILY_OCTAHEDRAL",
     "FAMILY_EQUAL_AREA",
+    "DISK_FAMILIES",
 ]
-
-# Geometry family codes; the native core dispatches on these integers (src/core/layouts.h).
-FAMILY_LATLONG = 0
-FAMILY_CUBE_GL = 1
-FAMILY_CUBE_EXR = 2
-FAMILY_SPHERE = 3
-FAMILY_ANGULAR = 4
-FAMILY_PARABOLOID = 5
-FAMILY_TENNISBALL = 6
-FAMILY_OCTAHEDRAL = 7
-FAMILY_EQUAL_AREA = 8
-
-# Families whose valid region in a cell is the unit disk a² + b² <= 1.
-DISK_FAMILIES = (FAMILY_SPHERE, FAMILY_ANGULAR, FAMILY_PARABOLOID)
 
 
 @dataclass(frozen=True)

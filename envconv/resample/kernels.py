@@ -27,12 +27,27 @@ __all__ = [
     "get_threads", "set_threads", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
-    "ibl_node_floats", "ibl_pyramid", "ibl_pyramid_binned", "ibl_pyramid_binned_any", "ibl_prefilter", "sh_project",
+    "ibl_pyramid", "ibl_pyramid_binned", "ibl_pyramid_binned_any", "ibl_prefilter", "sh_project",
     "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
-    "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES",
+    "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES", "FAMILY_LATLONG", "FAMILY_CUBE_GL",
+    "FAMILY_CUBE_EXR", "FAMILY_SPHERE", "FAMILY_ANGULAR", "FAMILY_PARABOLOID", "FAMILY_TENNISBALL",
+    "FAMILY_OCTAHEDRAL", "FAMILY_EQUAL_AREA", "DISK_FAMILIES",
 ]  # fmt: skip
 
 FILTER_NEAREST, FILTER_BILINEAR, FILTER_BICUBIC = 0, 1, 2
+#: Geometry family codes, as the core dispatches on them (src/core/layouts.h); the layouts
+#: take them from here (:mod:`envconv.layouts.base`), so Python never restates them.
+FAMILY_LATLONG = _core.FAMILY_LATLONG
+FAMILY_CUBE_GL = _core.FAMILY_CUBE_GL
+FAMILY_CUBE_EXR = _core.FAMILY_CUBE_EXR
+FAMILY_SPHERE = _core.FAMILY_SPHERE
+FAMILY_ANGULAR = _core.FAMILY_ANGULAR
+FAMILY_PARABOLOID = _core.FAMILY_PARABOLOID
+FAMILY_TENNISBALL = _core.FAMILY_TENNISBALL
+FAMILY_OCTAHEDRAL = _core.FAMILY_OCTAHEDRAL
+FAMILY_EQUAL_AREA = _core.FAMILY_EQUAL_AREA
+#: Families whose valid region in a cell is the unit disk a² + b² ≤ 1 (``is_disk`` in the core).
+DISK_FAMILIES = tuple(_core.DISK_FAMILIES)
 #: Output tiles of TILE × TILE pixels interpolate the map (src/core/tiles.h).
 TILE = _core.TILE
 #: A lat-long pixel spanning X texels along x reads rip-map level k, the largest with
@@ -317,9 +332,10 @@ def level_reads(rip, start, level_width, points) -> np.ndarray:
     return out
 
 
-def ibl_node_floats(nch: int) -> int:
-    """Floats per node of :func:`ibl_pyramid`'s pyramid, for ``nch`` channels."""
-    return _core.IBL_NODE_FIELDS + 4 * nch
+def _pyramid_buffer(p: int, nch: int) -> np.ndarray:
+    """An uninitialised float32 buffer for the pyramid of a p-cube with ``nch`` channels; its
+    size is the core's (``Pyramid::floats_for`` in src/core/ibl.h, the one place it is computed)."""
+    return np.empty(_core.ibl_pyramid_floats(int(p), int(nch)), np.float32)
 
 
 def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
@@ -327,8 +343,7 @@ def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
     two: every level's texel moments, packed as src/core/ibl.h describes."""
     faces = _c(faces, np.float32)
     p, nch = faces.shape[1], faces.shape[3]
-    count = sum(6 * (p >> k) ** 2 for k in range(p.bit_length()))
-    pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
+    pyramid = _pyramid_buffer(p, nch)
     _core.ibl_pyramid(faces, pyramid, _threads)
     return pyramid
 
@@ -343,8 +358,7 @@ def ibl_pyramid_binned(
     source for p)."""
     latlong = _c(latlong, np.float32)
     nch = latlong.shape[2]
-    count = sum(6 * (p >> k) ** 2 for k in range(int(p).bit_length()))
-    pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
+    pyramid = _pyramid_buffer(p, nch)
     done = _core.ibl_pyramid_binned(latlong, _c(to_pyramid, np.float64), int(p), int(sub),
                                     pyramid, _threads)  # fmt: skip
     return pyramid if done else None
@@ -359,8 +373,7 @@ def ibl_pyramid_binned_any(
     (radians). None when some texel received no point."""
     pixels = _c(pixels, np.float32)
     nch = pixels.shape[2]
-    count = sum(6 * (p >> k) ** 2 for k in range(int(p).bit_length()))
-    pyramid = np.empty(count * ibl_node_floats(nch), np.float32)
+    pyramid = _pyramid_buffer(p, nch)
     done = _core.ibl_pyramid_binned_any(pixels, *_geo(geometry), _c(to_pyramid, np.float64),
                                         int(p), int(sub), float(delta), pyramid, _threads)  # fmt: skip
     return pyramid if done else None

@@ -51,15 +51,19 @@ struct Pyramid {
     int64_t channels;
     static int64_t stride_for(int64_t channels) { return kFields + 4 * channels; }
     int64_t stride() const { return stride_for(channels); }
-    int64_t offset(int s) const {
-        int64_t off = 0;
-        for (int k = 0; k < s; ++k) off += 6 * (p >> k) * (p >> k);
-        return off * stride();
-    }
-    static int64_t node_count(int64_t p) {
+    // Nodes in levels 0 .. s - 1 of a pyramid of p (every level while p >> k >= 1): the one
+    // place the pyramid's size is computed; Python allocates through floats_for
+    // (envconv._core.ibl_pyramid_floats).
+    static int64_t nodes_before(int64_t p, int s) {
         int64_t count = 0;
-        for (int64_t q = p; q >= 1; q >>= 1) count += 6 * q * q;
+        for (int k = 0; k < s && (p >> k) >= 1; ++k) count += 6 * (p >> k) * (p >> k);
         return count;
+    }
+    int64_t offset(int s) const { return nodes_before(p, s) * stride(); }
+    static int64_t node_count(int64_t p) { return nodes_before(p, 63); }
+    // Floats of a whole pyramid of p with `channels` channels.
+    static int64_t floats_for(int64_t p, int64_t channels) {
+        return node_count(p) * stride_for(channels);
     }
 };
 

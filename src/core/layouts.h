@@ -7,8 +7,8 @@
 // Every face_to_dir is continued past its valid region (guard rings and filter taps read it),
 // and density is the solid angle per unit (a, b) area, in steradians.
 //
-// Family codes match envconv/layouts/base.py FAMILY_*. Kernels dispatch on the code, never on a
-// Python callback.
+// The family codes reach Python from here (module.cpp exports them; envconv/layouts/base.py
+// FAMILY_* reads them). Kernels dispatch on the code, never on a Python callback.
 #pragma once
 
 #include <algorithm>

@@ -258,7 +258,7 @@ void ibl_pyramid(Array<const float, nb::ndim<4>> faces, Array<float, nb::ndim<1>
                  int threads) {
     int64_t p = faces.shape(1), nch = faces.shape(3);
     if (faces.shape(0) != 6 || int64_t(faces.shape(2)) != p || p < 1 || (p & (p - 1)) ||
-        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(nch))
+        int64_t(out.shape(0)) != envconv::Pyramid::floats_for(p, nch))
         throw std::invalid_argument("faces must be (6, p, p, C) with p a power of two");
     nb::gil_scoped_release release;
     envconv::build_pyramid(faces.data(), p, nch, out.data(), threads);
@@ -269,7 +269,7 @@ bool ibl_pyramid_binned(Array<const float, nb::ndim<3>> image,
                         Array<float, nb::ndim<1>> out, int threads) {
     int64_t height = image.shape(0), width = image.shape(1), nch = image.shape(2);
     if (width != 2 * height || height < 1 || p < 1 || (p & (p - 1)) || sub < 1 ||
-        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(nch))
+        int64_t(out.shape(0)) != envconv::Pyramid::floats_for(p, nch))
         throw std::invalid_argument("image must be a lat-long (H, 2H, C), p a power of two");
     envconv::Rotation r;
     for (int k = 0; k < 9; ++k) r.m[k] = to_pyramid.data()[k];
@@ -288,7 +288,7 @@ bool ibl_pyramid_binned_any(Array<const float, nb::ndim<3>> image, GeoArray geo,
         int64_t(image.shape(1)) != g.columns * g.cell_width())
         throw std::invalid_argument("image does not match its layout's size");
     if (p < 1 || (p & (p - 1)) || sub < 1 || !(delta >= 0.0) ||
-        int64_t(out.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(nch))
+        int64_t(out.shape(0)) != envconv::Pyramid::floats_for(p, nch))
         throw std::invalid_argument("p must be a power of two and out sized for its pyramid");
     envconv::Rotation r;
     for (int k = 0; k < 9; ++k) r.m[k] = to_pyramid.data()[k];
@@ -305,7 +305,7 @@ void ibl_prefilter(Array<const float, nb::ndim<1>> pyramid, int64_t p, int64_t c
     envconv::Pyramid pyr{pyramid.data(), p, 0, channels};
     for (int64_t q = p; q >= 1; q >>= 1) ++pyr.levels;
     if (p < 1 || (p & (p - 1)) ||
-        int64_t(pyramid.shape(0)) != envconv::Pyramid::node_count(p) * envconv::Pyramid::stride_for(channels) ||
+        int64_t(pyramid.shape(0)) != envconv::Pyramid::floats_for(p, channels) ||
         int64_t(out.shape(2)) != channels || samples < 1 || !(alpha > 0.0) || !(tau > 0.0))
         throw std::invalid_argument("bad prefilter arguments");
     auto g = make_geometry(geo, cell_face, cell_turns, face_cell);
@@ -371,9 +371,26 @@ NB_MODULE(_core, m) {
     m.def("cancel", [](bool on) { envconv::cancel_requested.store(on); }, "on"_a);
     m.def("set_wide_rows", &envconv::set_wide_rows, "allowed"_a);
     m.attr("IBL_NODE_FIELDS") = envconv::Pyramid::kFields;
+    m.def("ibl_pyramid_floats", &envconv::Pyramid::floats_for, "p"_a, "channels"_a,
+          "Floats of the pyramid of a p-cube with `channels` channels (src/core/ibl.h).");
     m.attr("TILE") = envconv::kTile;  // output rows per band: the progress counter's unit
     m.attr("RIP_MIN_SPAN") = envconv::kRipMinSpan;
     m.attr("AUTO_MAX_SAMPLES") = envconv::kAutoMaxSamples;
     m.attr("AUTO_EDGE_SAMPLES") = envconv::kAutoEdgeSamples;
     m.attr("FAMILY_COUNT") = envconv::kFamilyCount;
+    // The geometry family codes (src/core/layouts.h), the one table Python reads them from
+    // (envconv/layouts/base.py FAMILY_*), and the families whose cells hold a unit disk.
+    m.attr("FAMILY_LATLONG") = int(envconv::kLatlong);
+    m.attr("FAMILY_CUBE_GL") = int(envconv::kCubeGL);
+    m.attr("FAMILY_CUBE_EXR") = int(envconv::kCubeExr);
+    m.attr("FAMILY_SPHERE") = int(envconv::kSphere);
+    m.attr("FAMILY_ANGULAR") = int(envconv::kAngular);
+    m.attr("FAMILY_PARABOLOID") = int(envconv::kParaboloid);
+    m.attr("FAMILY_TENNISBALL") = int(envconv::kTennisball);
+    m.attr("FAMILY_OCTAHEDRAL") = int(envconv::kOctahedral);
+    m.attr("FAMILY_EQUAL_AREA") = int(envconv::kEqualArea);
+    nb::list disks;
+    for (int family = 0; family < envconv::kFamilyCount; ++family)
+        if (envconv::is_disk(family)) disks.append(family);
+    m.attr("DISK_FAMILIES") = nb::steal<nb::tuple>(PyList_AsTuple(disks.ptr()));
 }
