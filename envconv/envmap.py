@@ -11,7 +11,7 @@ import numpy as np
 from .errors import LayoutError
 from .layouts import Layout, get_layout
 
-__all__ = ["EnvMap", "map_levels"]
+__all__ = ["EnvMap", "map_levels", "is_alpha", "alpha_channel"]
 
 
 @dataclass
@@ -114,17 +114,28 @@ class EnvMap:
 
     @property
     def alpha_index(self) -> int | None:
-        """Index of the alpha channel (named A or alpha), or None."""
-        for index, name in enumerate(self.channels):
-            if name.upper() == "A" or name.lower() == "alpha":
-                return index
-        return None
+        """Index of the alpha channel (:func:`alpha_channel`), or None."""
+        return alpha_channel(self.channels)
 
     def __repr__(self) -> str:
         return (
             f"EnvMap({self.layout.name}, N={self.size}, G={self.guard}, "
             f"{self.width}x{self.height}x{len(self.channels)} {','.join(self.channels)})"
         )
+
+
+def is_alpha(name: str) -> bool:
+    """Whether a channel called ``name`` is an alpha channel: ``A`` or ``alpha``, any case.
+
+    The one home of that rule: reading (holes get an ``A`` unless there is one), resampling
+    (``alpha=True`` fills it or adds ``A``), writing (stored unassociated) and previews ask it.
+    """
+    return name.upper() == "A" or name.lower() == "alpha"
+
+
+def alpha_channel(channels) -> int | None:
+    """Index of the first alpha channel (:func:`is_alpha`) among ``channels``, or None."""
+    return next((index for index, name in enumerate(channels) if is_alpha(name)), None)
 
 
 def default_channel_names(count: int) -> tuple[str, ...]:

@@ -20,7 +20,15 @@ sys.path.insert(0, os.path.dirname(__file__))
 import analytic  # noqa: E402
 import naive  # noqa: E402
 
-__all__ = ["rel_rms", "write_plain", "file_state", "run_cli", "stderr_lines"]
+__all__ = [
+    "rel_rms",
+    "write_plain",
+    "file_state",
+    "run_cli",
+    "stderr_lines",
+    "detect_layout",
+    "sh_evaluate",
+]
 
 settings.register_profile("envconv", max_examples=200, deadline=None)
 settings.load_profile("envconv")
@@ -34,6 +42,26 @@ def rel_rms(result, truth, weights=None) -> float:
         weights = np.ones(truth.shape[:2])
     w = np.asarray(weights, np.float64)[..., None]
     return float(np.sqrt((w * (result - truth) ** 2).sum() / (w * truth**2).sum()))
+
+
+def detect_layout(width, height, metadata, pixels=None):
+    """(layout, guard) the reader would place an image in (envconv.layouts.detect.find_layout),
+    or the LayoutError it would raise, asking for --from."""
+    from envconv.errors import LayoutError
+    from envconv.layouts.detect import find_layout
+
+    found = find_layout(width, height, metadata, pixels)
+    if found.layout is None:
+        raise LayoutError(found.reason)
+    return found.layout, found.guard
+
+
+def sh_evaluate(coefficients, dirs, frame: str = "world") -> np.ndarray:
+    """Σ c_lm Y_lm(d) at unit directions (..., 3): (..., C), with envconv's SH basis; with
+    irradiance coefficients this is the irradiance E(n)."""
+    from envconv.resample.harmonics import sh_basis
+
+    return sh_basis(dirs, frame) @ np.asarray(coefficients, np.float64)
 
 
 def write_plain(path, pixels, attributes=None, pixel_type="float") -> None:

@@ -196,7 +196,7 @@ def test_writing_gives_the_program_files(tmp_path, name):
         np.testing.assert_allclose(got[key], image, rtol=1e-6, atol=1e-6, err_msg=key)
 
 
-@pytest.mark.parametrize("name", envconv.layouts.facesets.face_set_names())
+@pytest.mark.parametrize("name", list(envconv.layouts.facesets.FACE_SETS))
 def test_labelled_pattern_round_trip(tmp_path, name):
     from envconv.views.pattern import render_pattern
 
@@ -381,7 +381,7 @@ def test_cli_ambiguity_is_one_line(tmp_path):
 def test_cli_layouts_lists_face_sets():
     result = run_cli(["layouts"])
     assert result.exit_code == 0
-    for name in envconv.layouts.facesets.face_set_names():
+    for name in list(envconv.layouts.facesets.FACE_SETS):
         assert any(line.startswith(name + " ") for line in result.stdout.splitlines()), name
     assert "rt bk lf ft up dn" in result.stdout
 

@@ -191,7 +191,7 @@ def test_wrong_types_and_choices_name_the_step_and_the_key(tmp_path, step, entry
 
 
 def test_samples_guard_and_mips_follow_one_rule_in_library_cli_and_graph(tmp_path):
-    """sampling.check_* is the one home: each bad value is refused by all three front doors."""
+    """resample.options.check_* is the one home: each bad value is refused by all three front doors."""
     from envconv.resample.options import check_guard, check_mips, check_samples
 
     assert check_mips("ggx:3") == (3, True) and check_mips("box") == (True, False)

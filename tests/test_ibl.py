@@ -173,14 +173,16 @@ def test_irradiance_matches_the_sh_irradiance_of_a_low_order_environment():
         x, y, z = d[..., 0], d[..., 1], d[..., 2]
         return np.stack([1 + 0.5 * y + 0.3 * x * z, 1 + 0.2 * (3 * z * z - 1), 2 - 0.4 * x], -1)
 
-    from envconv.resample.harmonics import evaluate, irradiance_coefficients, project
+    from conftest import sh_evaluate
+
+    from envconv.resample.harmonics import irradiance_coefficients, project
 
     source = _source(low)
     irr = envconv.convert(source, "cube-faces", size=8, irradiance=True)
     texels = np.stack(np.meshgrid(np.arange(6), np.arange(8), np.arange(8), indexing="ij"),
                       -1).reshape(-1, 3)  # fmt: skip
     coeffs = irradiance_coefficients(project(source))
-    truth = texel_mean(lambda d: evaluate(coeffs, d) / math.pi, 8, texels, samples=8)
+    truth = texel_mean(lambda d: sh_evaluate(coeffs, d) / math.pi, 8, texels, samples=8)
     got = _level_texels(irr.pixels, 8, texels)
     np.testing.assert_allclose(got, truth, rtol=3e-3)
 

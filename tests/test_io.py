@@ -8,13 +8,12 @@ import analytic
 import naive
 import numpy as np
 import pytest
-from conftest import file_state, write_plain
+from conftest import detect_layout, file_state, write_plain
 
 import envconv
 from envconv.engine.api import convert_file
 from envconv.errors import ImageIOError, LayoutError
 from envconv.io import read_image
-from envconv.layouts.detect import detect_layout
 
 # ---------------------------------------------------------------------------------------------
 # Round trips per format

@@ -17,12 +17,11 @@ import naive
 import numpy as np
 import ports
 import pytest
-from conftest import rel_rms, run_cli, stderr_lines, write_plain
+from conftest import detect_layout, rel_rms, run_cli, stderr_lines, write_plain
 
 import envconv
 from envconv.errors import LayoutError
 from envconv.layouts.conventions import resolve_convention
-from envconv.layouts.detect import detect_layout
 from envconv.layouts.geometry import dir_to_uv, pixel_directions, pixel_solid_angles, uv_to_dir
 
 SQUARES = ["octahedral", "equal-area"]

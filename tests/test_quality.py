@@ -195,7 +195,7 @@ def test_single_tap_loses_highlight_energy(starfield):
 @pytest.mark.parametrize("samples", [1, 2])
 def test_tiled_kernel_matches_naive(name, n, samples):
     """At these sizes most pixels take the kernel's interpolated-tile path (see
-    envconv.resample.kernels.tiles), which interpolates source positions and solid-angle weights;
+    src/core/tiles.h), which interpolates source positions and solid-angle weights;
     the result must still match the exact per-sample reference, near a mirror ball's rim
     (where the density is singular) as well."""
     source = naive.pixel_average("latlong", 128, analytic.radiance, 2).astype(np.float32)

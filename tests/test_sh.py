@@ -10,11 +10,10 @@ import analytic
 import naive
 import numpy as np
 import pytest
-from conftest import run_cli
+from conftest import run_cli, sh_evaluate
 
 import envconv
 from envconv.resample.harmonics import (
-    evaluate,
     irradiance_coefficients,
     irradiance_matrix,
     project,
@@ -54,7 +53,9 @@ def test_irradiance_of_known_environments():
     sky = naive.pixel_average("latlong", 64, lambda d: 2.0 + 3.0 * (d @ w)[..., None], samples=8)
     coeffs = irradiance_coefficients(project(envconv.EnvMap(sky.astype(np.float32), "latlong")))
     truth = math.pi * 2.0 + 2 * math.pi / 3 * 3.0 * (dirs @ w)
-    np.testing.assert_allclose(evaluate(coeffs, dirs)[:, 0], truth, rtol=0, atol=1e-3 * truth.max())
+    np.testing.assert_allclose(
+        sh_evaluate(coeffs, dirs)[:, 0], truth, rtol=0, atol=1e-3 * truth.max()
+    )
     # The quadratic form of R&H eq. 12 gives the same irradiance.
     m = irradiance_matrix(project(envconv.EnvMap(sky.astype(np.float32), "latlong")))[0]
     h = np.concatenate([dirs, np.ones((len(dirs), 1))], 1)

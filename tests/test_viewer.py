@@ -13,13 +13,20 @@ from test_preview import _ocio_view, camera_dirs
 import envconv
 from envconv.cli.main import cli
 from envconv.views.pattern import LABELS, pattern, render_pattern
-from envconv.views.viewer import build_page, rgbe_decode, rgbe_encode
+from envconv.views.viewer import build_page, rgbe_encode
 
 SIZE = 256  # the page's viewport (Emulation.setDeviceMetricsOverride), square
 BROWSERS = ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable")
 FLAGS = ("--headless", "--no-sandbox", "--disable-gpu", "--use-angle=swiftshader",
          "--enable-unsafe-swiftshader", "--disable-background-networking",
          "--disable-component-update", "--disable-sync", "--no-first-run")  # fmt: skip
+
+
+def rgbe_decode(rgbe: np.ndarray) -> np.ndarray:
+    """Inverse of rgbe_encode, as the page's shader decodes it: (mantissa + 0.5) · 2^(e − 136)."""
+    e = rgbe[..., 3].astype(np.int32)
+    f = np.where(e > 0, np.ldexp(1.0, e - 136), 0.0)
+    return ((rgbe[..., :3] + 0.5) * f[..., None]).astype(np.float32)
 
 
 @pytest.fixture(scope="module")

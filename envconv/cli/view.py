@@ -13,7 +13,9 @@ __all__ = ["view_command"]
 
 
 def _default_output(input_path: str) -> str:
-    stem = os.path.splitext(os.path.basename(input_path.replace("{face}", "")))[0].rstrip("_.-")
+    from ..io.face_files import face_path
+
+    stem = os.path.splitext(os.path.basename(face_path(input_path, "")))[0].rstrip("_.-")
     return f"{stem or 'envmap'}.view.html"
 
 

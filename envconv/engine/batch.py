@@ -33,6 +33,7 @@ from typing import Any
 from .. import io
 from ..errors import EnvconvError, ImageIOError, UsageError
 from ..io import FORMATS
+from ..io.face_files import face_glob
 from ..io.temps import is_temp_name
 from .outputs import check_outputs, input_files
 from .pipeline import Pipeline, Read, Resample, Write, path_variables
@@ -208,7 +209,7 @@ def _input_mtime(job: Job) -> float:
     times = []
     for step in job.pipeline.bound(job.input):
         if isinstance(step, Read) and step.params["path"]:
-            for path in glob.glob(glob.escape(step.params["path"]).replace("{face}", "*")):
+            for path in glob.glob(face_glob(step.params["path"])):
                 times.append(os.path.getmtime(path))
     return max(times) if times else float("inf")
 

@@ -19,7 +19,8 @@ from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from ..layouts.facesets import FACE_SETS, FaceSet, get_face_set
 
-__all__ = ["FaceFiles", "find_face_files", "part_path", "first_file", "files_of"]
+__all__ = ["FaceFiles", "find_face_files", "face_path", "face_glob", "part_path", "first_file",
+           "files_of"]  # fmt: skip
 
 _CUBE = "cube-faces"
 _PARABOLOID = "paraboloid-split"
@@ -44,10 +45,29 @@ class _Candidate(NamedTuple):
         return self.face_set.name if self.face_set is not None else self.layout
 
 
+#: The placeholder of a multi-file path.
+FACE = "{face}"
+
+
+def face_path(template: str, name: str) -> str:
+    """``template`` with ``{face}`` replaced by ``name`` (``sky_{face}.exr``, ``px`` →
+    ``sky_px.exr``): the one home of that expansion, for reading, writing and batches."""
+    return template.replace(FACE, name)
+
+
+def face_glob(template: str) -> str:
+    """A glob that matches every file of a ``{face}`` template: the template's own glob
+    characters escaped and ``{face}`` matching any name."""
+    import glob
+
+    return face_path(glob.escape(template), "*")
+
+
 def part_path(template: str, name: str, listing: dict | None = None) -> str:
-    """``template`` with ``{face}`` replaced by ``name``; an existing file that differs only in
-    case stands in for a missing exact name. ``listing`` caches directory listings."""
-    path = template.replace("{face}", name)
+    """``template`` with ``{face}`` replaced by ``name`` (:func:`face_path`); an existing file
+    that differs only in case stands in for a missing exact name. ``listing`` caches
+    directory listings."""
+    path = face_path(template, name)
     if os.path.exists(path):
         return path
     directory, base = os.path.split(path)

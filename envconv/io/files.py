@@ -2,7 +2,7 @@
 
 This module knows files, not layouts: :mod:`envconv.io` builds environment maps on top of it.
 OpenImageIO opens every file and reads every header; the pixels of plain scanline EXRs are
-decoded by the OpenEXR library, which is faster at it (:mod:`envconv.exr_io`).
+decoded by the OpenEXR library, which is faster at it (:mod:`envconv.io.exr`).
 
 Windows
     An image is its **display window**, as OpenEXR defines it (OIIO's ``full_x``, ``full_y``,
@@ -38,7 +38,7 @@ from .exr import is_plain_exr as _plain_exr
 from .exr import read_exr_pixels as _read_exr_pixels
 from .formats import FORMATS
 
-__all__ = ["read_file", "read_file_header", "read_image", "read_header", "read_pixel_type",
+__all__ = ["read_file", "read_file_header", "read_image", "read_pixel_type",
            "FileHeader", "FileImage", "Part", "FORMATS", "limit_threads"]  # fmt: skip
 
 log = logging.getLogger(__name__)
@@ -322,18 +322,6 @@ def read_image(path: str | os.PathLike, level: int = 0, part: str | int | None =
     image = read_file(path, level, part)
     header = image.header
     return image.pixels, header.channels, header.metadata, header.pixel_type
-
-
-def read_header(path: str | os.PathLike, level: int = 0, part: str | int | None = None):
-    """Read one image file's header without its pixels.
-
-    Returns
-    -------
-    width, height (of the display window), channel names, metadata dict (of MIP level
-    ``level``), as :func:`read_image` gives them
-    """
-    header = read_file_header(path, level, part)
-    return header.width, header.height, header.channels, header.metadata
 
 
 def read_pixel_type(path: str | os.PathLike, part: str | int | None = None) -> str:

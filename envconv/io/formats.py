@@ -24,7 +24,7 @@ FORMATS = {
 }
 
 
-#: Texture containers envconv writes itself, never reads (:mod:`envconv.textures`), as above.
+#: Texture containers envconv writes itself, never reads (:mod:`envconv.io.textures`), as above.
 CONTAINER_FORMATS = {
     ".dds": ("dds", ("half", "float"), None, 4),
     ".ktx2": ("ktx2", ("half", "float"), None, 4),

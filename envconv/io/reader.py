@@ -7,7 +7,7 @@ extension. Pixels are always float32 in memory, in scene-linear Rec.709: :func:`
 Multi-file layouts (cube-faces, paraboloid-split) name their parts with ``{face}`` in the path:
 px nx py ny pz nz, or front back. ``faces=`` names another program's skybox files and face
 orientations (Quake's ft bk lf rt up dn, Unity's Front …: :mod:`envconv.layouts.facesets`); reading
-finds the set from the files that exist when it is not given (:mod:`envconv.face_files`).
+finds the set from the files that exist when it is not given (:mod:`envconv.io.face_files`).
 
 This module reads maps (files through :mod:`envconv.io.files`); writing lives in
 :mod:`envconv.io.writer` (every output goes to a temporary file renamed into place, so a failure
@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ..envmap import EnvMap
+from ..envmap import EnvMap, alpha_channel
 from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from ..layouts.detect import place_image
@@ -120,7 +120,7 @@ def _check_memory(path: str, level: int, part, files: int = 1) -> None:
 
     header = read_file_header(path, level, part)
     holes = header.holes
-    channels = len(header.channels) + int(holes and not any(_is_alpha(c) for c in header.channels))
+    channels = len(header.channels) + int(holes and alpha_channel(header.channels) is None)
     need = memory.estimate_read(header.width, header.height, channels, header.pixel_type, holes)
     if files > 1:  # every file's image, then the mosaic they are joined into
         need = 2 * files * (need - memory.SLACK) + memory.SLACK
@@ -134,7 +134,7 @@ def _with_alpha(pixels: np.ndarray, header: FileHeader, valid: np.ndarray | None
     part's) holding ``valid`` when the image has holes and no alpha."""
     channels = header.channels
     parts = header.part_channels if len(header.chosen) > 1 else ()
-    if valid is None or any(_is_alpha(c) for c in channels):
+    if valid is None or alpha_channel(channels) is not None:
         return pixels, channels, parts
     at = len(header.first.channels)
     pixels = np.concatenate([pixels[:, :, :at], valid[:, :, None], pixels[:, :, at:]], axis=2)
@@ -151,16 +151,12 @@ def read_unplaced(path: str | os.PathLike, level: int = 0, part: str | None = No
     return pixels, channels
 
 
-def _is_alpha(name: str) -> bool:
-    return name.upper() == "A" or name.lower() == "alpha"
-
-
 def read_header(path: str | os.PathLike, level: int = 0, part: str | None = None):
     """Width, height, channels and metadata of the map :func:`read` would give (display
     window; an ``A`` added where the data window leaves holes), from the header alone."""
     header = read_file_header(path, level, part)
     channels = header.channels
-    if header.holes and not any(_is_alpha(c) for c in channels):
+    if header.holes and alpha_channel(channels) is None:
         at = len(header.first.channels)
         channels = (*channels[:at], "A", *channels[at:])
     return header.width, header.height, channels, header.metadata

@@ -12,7 +12,7 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..envmap import EnvMap
+from ..envmap import EnvMap, alpha_channel
 from ..layouts.grids import CENTRES, tagged_grid
 from .exr_header import PLACEHOLDER
 from .files import _oiio
@@ -73,9 +73,7 @@ def level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, le
         pixels = _take(pixels, [0, 0, 0])
         channels = ["R", "G", "B"]
     nch = pixels.shape[2]
-    alpha = next(
-        (k for k, c in enumerate(channels[:nch]) if c.upper() == "A" or c.lower() == "alpha"), None
-    )
+    alpha = alpha_channel(channels[:nch])
     attributes: list[tuple[str, Any]] = []
     if alpha is not None and fmt in ("png", "tiff"):
         # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or

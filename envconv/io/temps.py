@@ -10,7 +10,7 @@ format by extension)::
 * :func:`is_temp_name` recognises them (and the ``.NAME.envconv-PID.tmp.EXT`` names of older
   versions), so ``envconv batch DIR`` and globs never take one as an input.
 * :func:`live_temps` are this process's unfinished temporary files: an interrupted run removes
-  them on its way out (:mod:`envconv.cli.interrupt`).
+  them on its way out (:mod:`envconv.engine.interrupt`).
 * :func:`clean_stale` runs before the first write into a folder: it removes the temporary
   files that a killed run (kill -9, power loss) left there, i.e. those of this host whose
   process is gone. Files of a live process, or of another host (a shared folder written by

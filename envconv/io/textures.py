@@ -1,6 +1,6 @@
 """Engine-ready texture files: DDS and KTX2 cube maps (or 2-D textures) with their mip chains.
 
-envconv writes these containers itself (:mod:`envconv.dds`, :mod:`envconv.ktx2`): no
+envconv writes these containers itself (:mod:`envconv.io.dds`, :mod:`envconv.io.ktx2`): no
 maintained Python library writes float DDS or KTX2, and OpenImageIO reads neither float DDS
 nor KTX2. A map in a GL-table cube layout (cube-faces, cube-hstrip, cube-vstrip, cube-hcross,
 cube-vcross) is written as a cube map: its six faces, in the face order and orientation both

@@ -19,6 +19,7 @@ from ..errors import ImageIOError, LayoutError
 from ..layouts import get_layout
 from .chatter import library_output
 from .exr_header import PLACEHOLDER, store_sampleborder
+from .face_files import face_path
 from .files import _first_line, _oiio
 from .formats import CONTAINER_FORMATS, format_of
 from .specs import LevelImage, image_spec, level_image, set_mip_attributes
@@ -28,10 +29,6 @@ from .temps import temp_for as _temp_path
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
 
 log = logging.getLogger(__name__)
-
-
-def _part_path(template: str, face: str) -> str:
-    return template.replace("{face}", face)
 
 
 def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=None) -> list[str]:
@@ -62,7 +59,7 @@ def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=
                 f"layout {layout.name} writes {len(layout.face_names)} files; "
                 "put {face} in the output path, e.g. sky_{face}.exr"
             )
-        return [_part_path(path, name) for name in names]
+        return [face_path(path, name) for name in names]
     if "{face}" in path:
         raise LayoutError(
             f"{{face}} in the output path needs a multi-file layout, not {layout.name}"
@@ -109,7 +106,7 @@ def write(
     ``envconv:level``). Alpha is written unassociated (never premultiplied). ``faces`` writes a
     ``cube-faces`` map as another program's six skybox files (names and face turns of
     :mod:`envconv.layouts.facesets`). A ``.dds`` or ``.ktx2`` path gets a texture container with every
-    level (:mod:`envconv.textures`). Returns the paths written.
+    level (:mod:`envconv.io.textures`). Returns the paths written.
     """
     from .encode import encode_output
 
@@ -176,7 +173,7 @@ def _check_parts(envmap: EnvMap, path: str) -> None:
 
 
 def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarray]) -> str:
-    """Write a DDS or KTX2 file (:mod:`envconv.textures`) through a temporary file."""
+    """Write a DDS or KTX2 file (:mod:`envconv.io.textures`) through a temporary file."""
     from .. import __version__
     from .textures import encode_texture, texture_images
 

@@ -113,9 +113,7 @@ __all__ = [
     "Convention",
     "Preset",
     "PRESETS",
-    "preset_names",
     "parse_axes",
-    "axes_string",
     "resolve_convention",
     "environment_axes",
     "world_frame",
@@ -293,11 +291,6 @@ _ALIASES = {
 }  # fmt: skip
 
 
-def preset_names() -> list[str]:
-    """Names of the convention presets, in documentation order."""
-    return list(PRESETS)
-
-
 def parse_axes(spec: str) -> np.ndarray:
     """Signed permutation matrix A of an AXES string such as ``"-x,z,y"``.
 
@@ -325,16 +318,6 @@ def parse_axes(spec: str) -> np.ndarray:
         used.add(letter)
         matrix[row, "xyz".index(letter)] = sign
     return matrix
-
-
-def axes_string(matrix) -> str:
-    """AXES string of a signed permutation matrix (inverse of :func:`parse_axes`)."""
-    matrix = np.asarray(matrix)
-    parts = []
-    for row in matrix:
-        col = int(np.argmax(np.abs(row)))
-        parts.append(("-" if row[col] < 0 else "") + "xyz"[col])
-    return ",".join(parts)
 
 
 def _check_matrix(matrix) -> np.ndarray:

@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import LayoutError
 from . import LAYOUTS, Layout, get_layout
 
-__all__ = ["detect_layout", "find_layout", "place_image", "misfit_message", "tagged_guard", "Found"]
+__all__ = ["find_layout", "place_image", "misfit_message", "tagged_guard", "Found"]
 
 _UNIQUE_ASPECTS = {
     (3, 4): "cube-vcross",
@@ -71,16 +71,6 @@ def find_layout(
     if envmap == "cube" or texture == "cubeface environment":
         return Found(get_layout("cube-exr"), 0, ("cube-exr",), "OpenEXR envmap attribute cube")
     return _from_aspect(width, height, pixels)
-
-
-def detect_layout(
-    width: int, height: int, metadata: dict[str, Any], pixels: np.ndarray | None = None
-) -> tuple[Layout, int]:
-    """Return (layout, guard) of an image, or raise LayoutError asking for ``--from``."""
-    found = find_layout(width, height, metadata, pixels)
-    if found.layout is None:
-        raise LayoutError(found.reason)
-    return found.layout, found.guard
 
 
 def _from_aspect(width: int, height: int, pixels: np.ndarray | None) -> Found:

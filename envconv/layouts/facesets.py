@@ -46,7 +46,6 @@ from ..errors import LayoutError, UsageError
 __all__ = [
     "FaceSet",
     "FACE_SETS",
-    "face_set_names",
     "get_face_set",
     "is_face_set",
     "to_envconv",
@@ -156,11 +155,6 @@ _FACE_SET_LIST = (
 #: Every face set by name, in documentation order.
 FACE_SETS: dict[str, FaceSet] = {s.name: s for s in _FACE_SET_LIST}
 _BY_NAME = {alias: s for s in _FACE_SET_LIST for alias in (s.name, *s.aliases)}
-
-
-def face_set_names() -> list[str]:
-    """Names of the face sets, in documentation order."""
-    return list(FACE_SETS)
 
 
 def is_face_set(name) -> bool:

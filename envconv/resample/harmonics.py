@@ -46,7 +46,6 @@ __all__ = [
     "project",
     "irradiance_coefficients",
     "irradiance_matrix",
-    "evaluate",
     "sh_record",
 ]
 
@@ -130,12 +129,6 @@ def irradiance_matrix(coefficients: np.ndarray) -> np.ndarray:
         [c2 * L11, c2 * L1m1, c2 * L10, c4 * L00 - c5 * L20],
     ])  # fmt: skip
     return np.moveaxis(m, -1, 0)
-
-
-def evaluate(coefficients: np.ndarray, dirs, frame: str = "world") -> np.ndarray:
-    """Σ c_lm Y_lm(d) at unit directions (..., 3): (..., C). With irradiance coefficients
-    (:func:`irradiance_coefficients`) this is the irradiance E(n)."""
-    return sh_basis(dirs, frame) @ np.asarray(coefficients, np.float64)
 
 
 def sh_record(envmap: EnvMap, frame: str = "world") -> dict:

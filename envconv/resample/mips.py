@@ -50,8 +50,6 @@ __all__ = [
     "full_level_count",
     "level_count",
     "build_chain",
-    "convert_level",
-    "level_solid_angles",
 ]
 
 log = logging.getLogger(__name__)
@@ -183,62 +181,3 @@ def _fallback_level(source, to, size, guard, fill, samples, filt, rot, sizes, le
     sgeo = kernel_geometry(source.layout, source.size, source.guard)
     return _run_direct(source.pixels, sgeo, rot, dgeo_all, fill, (hk, wk), scale, s_k, filt,
                        cover)  # fmt: skip
-
-
-def convert_level(
-    envmap: EnvMap,
-    to: Layout | str,
-    level: int,
-    size: int | None = None,
-    samples: int | str | None = "auto",
-    filter: str = "bilinear",
-    rotate=None,
-    guard: int | str = 0,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Resample mip level ``level`` of layout ``to`` directly from ``envmap``.
-
-    This is the reference a chain level must match: texel (i, j) is the solid-angle mean of
-    the environment over its level-0 footprint, from S×S sub-samples per texel. With
-    ``samples="auto"``, S is the level-0 automatic count times ``W0 / W_k`` (capped at 32).
-
-    Returns
-    -------
-    pixels : (H_k, W_k, C) float32
-        Colour (every channel of ``envmap``).
-    coverage : (H_k, W_k) float32
-        Fraction of each texel in the layout's valid region.
-    """
-    from ..layouts.rotation import parse_rotation, rotation_matrix
-    from .options import FILTERS, auto_samples, check_guard, check_samples, default_size
-
-    to = get_layout(to)
-    fill = guard == "fill"
-    guard_px = 0 if fill else check_guard(guard)
-    if size is None:
-        size = default_size(envmap, to)
-    sizes = mip_sizes(to, size, guard_px, True)
-    if not 0 <= level < len(sizes):
-        raise UsageError(f"level must be between 0 and {len(sizes) - 1}, got {level}")
-    (w0, h0), (wk, hk) = sizes[0], sizes[level]
-    scale = (w0 / wk, h0 / hk)
-    n_samples = check_samples(samples)
-    if n_samples is None:
-        n_samples = auto_samples(envmap, to, size, math.sqrt(scale[0] * scale[1]))
-    rot = np.ascontiguousarray(rotation_matrix(*parse_rotation(rotate)).T)
-    sgeo = kernel_geometry(envmap.layout, envmap.size, envmap.guard)
-    out, coverage, _ = _run_direct(
-        envmap.pixels, sgeo, rot, kernel_geometry(to, size, guard_px), fill, (hk, wk), scale,
-        n_samples, FILTERS[filter],
-    )  # fmt: skip
-    return out, coverage
-
-
-def level_solid_angles(
-    layout: Layout | str, size: int, guard: int = 0, level: int = 0, samples: int = 4
-) -> np.ndarray:
-    """Solid angle (sr) of the valid part of every texel of mip level ``level``, (H_k, W_k)."""
-    layout = get_layout(layout)
-    sizes = mip_sizes(layout, size, guard, True)
-    (w0, h0), (wk, hk) = sizes[0], sizes[level]
-    geometry = kernel_geometry(layout, size, guard)
-    return kernels.pixel_solid_angles(geometry, w0 / wk, h0 / hk, samples, (hk, wk))

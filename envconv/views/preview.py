@@ -30,7 +30,7 @@ import logging
 
 import numpy as np
 
-from ..envmap import EnvMap
+from ..envmap import EnvMap, alpha_channel
 from ..layouts.geometry import dir_to_uv, pixel_directions, pixel_solid_angles
 from .font import draw_text, text_width
 
@@ -52,9 +52,9 @@ _FLOOR = 2.0**-20
 
 
 def _rgb_alpha(pixels: np.ndarray, channels) -> tuple[np.ndarray, np.ndarray | None]:
-    names = [c.upper() for c in channels] if channels else []
-    alpha = pixels[..., names.index("A")] if "A" in names else None
-    colour = [k for k, c in enumerate(names or range(pixels.shape[2])) if c != "A"][:3]
+    at = alpha_channel(channels) if channels else None
+    alpha = pixels[..., at] if at is not None else None
+    colour = [k for k in range(pixels.shape[2]) if k != at][:3]
     rgb = pixels[..., colour]
     if rgb.shape[-1] < 3:
         rgb = np.repeat(rgb[..., :1], 3, axis=-1)

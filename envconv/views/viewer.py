@@ -44,7 +44,6 @@ __all__ = [
     "GGX_LEVELS",
     "ggx_page_levels",
     "rgbe_encode",
-    "rgbe_decode",
     "page_presets",
     "build_page",
 ]
@@ -74,13 +73,6 @@ def rgbe_encode(rgb: np.ndarray) -> np.ndarray:
     out[..., :3] = np.clip(np.floor(rgb * scale[..., None]), 0, 255).astype(np.uint8)
     out[..., 3] = np.where(keep, exp + 128, 0).astype(np.uint8)
     return out
-
-
-def rgbe_decode(rgbe: np.ndarray) -> np.ndarray:
-    """Inverse of :func:`rgbe_encode` (the page decodes the same way)."""
-    e = rgbe[..., 3].astype(np.int32)
-    f = np.where(e > 0, np.ldexp(1.0, e - 136), 0.0)
-    return ((rgbe[..., :3] + 0.5) * f[..., None]).astype(np.float32)
 
 
 def page_presets() -> dict[str, list[float]]:
