@@ -194,8 +194,9 @@ def test_cli_writes_one_mipmapped_exr(sky, tmp_path):
     # --mips followed by another option, and --mips K.
     result = CliRunner().invoke(cli, args[:-3] + ["--mips", "--guard", "1", "--samples", "1"])
     assert result.exit_code == 0, result.output
+    # --mips 3 to one EXR contradicts OpenEXR's full chain: a usage error before any work.
     result = CliRunner().invoke(cli, args[:-1] + ["--mips", "3"])
-    assert result.exit_code == 1 and "levels down to" in result.output
+    assert result.exit_code == 2 and "levels down to" in result.output
 
 
 def test_other_outputs(sky, tmp_path):
@@ -219,5 +220,5 @@ def test_other_outputs(sky, tmp_path):
     assert io.mip_levels(tif[0]) == [(8, 8), (4, 4), (2, 2), (1, 1)]
     back = io.read(tmp_path / "sky_{face}.tif", layout="cube-faces", level=1)
     np.testing.assert_array_equal(back.pixels, env.levels[1])
-    with pytest.raises(envconv.ImageIOError, match="level"):
+    with pytest.raises(envconv.UsageError, match="level"):  # a chain, one image per file
         io.write(env, tmp_path / "sky_{face}.png")

@@ -16,7 +16,7 @@ from conftest import run_cli, stderr_lines
 from node_readers import read_container
 
 import envconv
-from envconv.errors import ImageIOError, LayoutError
+from envconv.errors import LayoutError, UsageError
 
 N = 16
 LEVELS = 5  # 16, 8, 4, 2, 1
@@ -204,7 +204,7 @@ def test_dds_latlong_header(tmp_path):
 
 def test_guarded_cube_and_face_paths_are_refused(tmp_path, chain):
     guarded = envconv.convert(_direction_latlong(), "cube-hstrip", size=N, guard=2)
-    with pytest.raises(ImageIOError, match="guard"):
+    with pytest.raises(UsageError, match="guard"):  # two arguments contradict: exit 2
         envconv.write(guarded, tmp_path / "g.dds")
     with pytest.raises(LayoutError, match="drop"):
         envconv.write(chain, tmp_path / "c_{face}.ktx2")

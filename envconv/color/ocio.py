@@ -37,6 +37,7 @@ from .quantize import colour_slice as _colour
 __all__ = [
     "WORKING_COLORSPACE",
     "config_for",
+    "check_colorspace",
     "input_colorspace_of",
     "to_working",
     "working_pixels",
@@ -411,6 +412,17 @@ def config_for(ocio_config: str | os.PathLike | None) -> Any:
     """The config from ``ocio_config``, else ``$OCIO``, else ``ocio://default`` (cached)."""
     path = None if ocio_config is None else os.fspath(ocio_config)
     return _load(path, os.environ.get("OCIO"))
+
+
+def check_colorspace(name: str, ocio_config: str | os.PathLike | None = None) -> str:
+    """The canonical name of a colour space the user named (an option, a graph file's key),
+    or UsageError with the close names: an unknown name is bad usage (exit 2), found before
+    any work. A config that cannot be loaded stays a ColorError."""
+    config = config_for(ocio_config)
+    try:
+        return resolve_colorspace(config, name)
+    except ColorError as exc:
+        raise UsageError(str(exc)) from None
 
 
 def input_colorspace_of(

@@ -68,41 +68,37 @@ def plan_convert(
 ) -> dict[str, Any]:
     """What :func:`convert_file` would write, from the input's header alone (no pixels read).
 
+    The engine plans the run as it would run it, and the writer says what it will store
+    (:func:`envconv.io.write_plan.plan_write`): nothing here restates their rules. Refuses,
+    like a run, what breaks the output policy and what the writer cannot hold.
+
     Returns a dict: ``files``, ``layout``, ``size`` (N), ``guard``, ``width`` × ``height`` (one
-    file), ``levels``, ``channels``, ``bit_depth``, ``compression`` (None: format default),
-    ``input_colorspace``, ``working_colorspace`` and ``output_colorspace`` (OCIO names).
+    file), ``levels`` (MIP levels each file holds), ``channels``, ``bit_depth``,
+    ``compression`` (None: format default), ``format``, ``input_colorspace``,
+    ``working_colorspace`` and ``output_colorspace`` (OCIO names).
     """
     from ..color.ocio import WORKING_COLORSPACE, input_colorspace_of
-    from ..io.encode import plan_output
     from ..io.face_files import first_file
 
     read, write, color = dict(read or {}), dict(write or {}), dict(color or {})
     resample = dict(resample or {})
     output = convert_pipeline(input_path, output_path, read, resample, write, color).plan()[0]
+    stored = output.writes[0]
     route_face_sets(input_path, read, resample, write)
     first = first_file(input_path, read.get("layout"), read.get("faces"))
     level, part = int(read.get("level", 0) or 0), read.get("part")
-    _, _, channels, metadata = io.read_header(first, level, part)
-    pixel_type = io.read_pixel_type(first, part)
+    metadata = io.read_header(first, level, part)[3]
     config = write.get("ocio_config") or read.get("ocio_config")
-    source = input_colorspace_of(metadata, pixel_type, read.get("input_colorspace"), config)
+    source = input_colorspace_of(metadata, io.read_pixel_type(first, part),
+                                 read.get("input_colorspace"), config)  # fmt: skip
     working = input_colorspace_of({}, "float", WORKING_COLORSPACE, config)
-    plan = plan_output(output_path, pixel_type, {"oiio:ColorSpace": working},
-                       write.get("output_colorspace"), write.get("bit_depth"), config,
-                       write.get("compression"))  # fmt: skip
-    channels = list(channels)
-    if resample.get("alpha") and not any(
-        c.upper() == "A" or c.lower() == "alpha" for c in channels
-    ):
-        channels.append("A")
-    max_channels = io.WRITE_FORMATS[os.path.splitext(os.fspath(output_path))[1].lower()][3]
-    channels = ["R", "G", "B"] if plan.format == "hdr" else channels[:max_channels]
     return {
         "files": list(output.files), "layout": output.layout, "size": output.size,
         "guard": output.guard, "width": output.width, "height": output.height,
-        "levels": output.levels, "channels": channels, "bit_depth": plan.pixel_type,
-        "compression": plan.compression, "input_colorspace": source,
-        "working_colorspace": working, "output_colorspace": plan.colorspace,
+        "levels": stored.levels, "channels": list(stored.channels),
+        "bit_depth": stored.pixel_type, "compression": stored.compression,
+        "format": stored.format, "input_colorspace": source, "working_colorspace": working,
+        "output_colorspace": stored.colorspace,
     }  # fmt: skip
 
 

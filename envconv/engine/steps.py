@@ -183,8 +183,12 @@ class Output:
     """One output of a pipeline: what was (or would be) written.
 
     ``width``/``height`` are one file's size in pixels at level 0; ``levels`` counts MIP levels;
-    ``files`` lists every file (empty when the output was not written); ``envmap`` holds the
-    pixels when the pipeline ran with ``keep=True``.
+    ``channels`` are the output's channels; ``files`` lists every file (empty when the output
+    was not written); ``writes`` holds, for each write of this output, what the writer stores
+    (:class:`envconv.io.write_plan.WritePlan`: files, format, pixel type, channels, levels;
+    from a plan, and from a run's own plan); ``seconds`` the time its resample and writes took
+    in a run (``resample``, ``write``); ``envmap`` holds the pixels when the pipeline ran with
+    ``keep=True``.
     """
 
     input: str | None
@@ -196,6 +200,9 @@ class Output:
     levels: int = 1
     files: list[str] = field(default_factory=list)
     envmap: EnvMap | None = None
+    channels: tuple[str, ...] = ()
+    writes: list[Any] = field(default_factory=list)
+    seconds: dict[str, float] = field(default_factory=dict)
 
 
 def path_variables(input_path: str | os.PathLike | None) -> dict[str, str]:

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import logging
 import os
+import time
 from dataclasses import dataclass, replace
 from types import SimpleNamespace
 from typing import Any
@@ -21,6 +22,7 @@ from typing import Any
 from .. import io
 from ..errors import EnvconvError, ImageIOError, UsageError
 from ..layouts import get_layout
+from .checks import check_colorspace_name, check_levels, working_space
 from .steps import (
     _IO_PLACEHOLDERS,
     VARIABLES,
@@ -45,7 +47,8 @@ MODES = ("check", "plan", "run")
 
 
 class SourceHeader:
-    """What a plan knows of a source: layout, size, guard and channels, from the header."""
+    """What a plan knows of a source: layout, size, guard, channels and pixel type, from the
+    header."""
 
     def __init__(self, path: str, options: dict[str, Any]) -> None:
         from ..layouts.detect import place_image
@@ -62,13 +65,15 @@ class SourceHeader:
             width *= get_layout(layout).n_faces
         found, guard, size = place_image(width, height, metadata, layout, level=level)
         self.layout, self.guard, self.channels, self.size = found, guard, channels, size
+        self.pixel_type = io.read_pixel_type(first, options.get("part"))
 
 
 @dataclass
 class _Latest:
     """The latest output: its record, its pixels (run mode), whether a write has taken it,
-    whether it is the source itself, whether a rotate came after it, and the colour space a
-    colorspace step put it in ((name, config) or None)."""
+    whether it is the source itself, whether a rotate came after it, the colour space a
+    colorspace step put it in ((name, config) or None), and the resample's keywords (check
+    mode: what the writes can be checked against before any header is read)."""
 
     record: Output | None
     env: Any
@@ -77,20 +82,24 @@ class _Latest:
     is_source: bool = False
     stale_at: int | None = None
     space: tuple[str, str | None] | None = None
+    request: dict[str, Any] | None = None
 
 
 class Walk:
     """One pass over the steps in ``mode`` (``check``, ``plan`` or ``run``).
 
     ``written`` collects each file as it is written (run mode); ``warnings`` collects one-line
-    warnings (NaN/Inf, clipping) when it is a list, else they are logged. ``targets`` lists
-    (file, no_clobber) of every write (plan and run modes).
+    warnings (NaN/Inf, clipping) when it is a list, else they are logged; ``timings`` adds up
+    the seconds spent reading (and preparing), resampling and writing (run mode). ``targets``
+    lists (file, no_clobber) of every write (plan and run modes).
     """
 
     def __init__(self, variables: dict[str, str], mode: str, keep: bool = False,
-                 written: list[str] | None = None, warnings: list[str] | None = None) -> None:  # fmt: skip
+                 written: list[str] | None = None, warnings: list[str] | None = None,
+                 timings: dict[str, float] | None = None) -> None:  # fmt: skip
         assert mode in MODES, mode
         self.variables, self.mode, self.keep = variables, mode, keep
+        self.timings = timings if timings is not None else {}
         self.written = written if written is not None else []
         self.warnings = warnings
         self.outputs: list[Output] = []
@@ -135,14 +144,26 @@ class Walk:
         if self.mode == "run":
             from ..color.prepare import prepare_input
 
+            start = time.perf_counter()
             source = io.read(self.input, **step.read_options)
             self.source, notes = prepare_input(source, **step.prepare_options)
+            self._add_time("read", start)
             self._warn(notes)
         elif self.mode == "plan":
             self.source = SourceHeader(self.input, step.read_options)
         else:
             self.source = SimpleNamespace()
+            options = step.read_options
+            check_colorspace_name(options.get("input_colorspace"), options.get("ocio_config"))
         self.rotation, self.latest, self.source_space = None, None, None
+
+    def _add_time(self, phase: str, start: float, record: Output | None = None) -> float:
+        """Add the seconds since ``start`` to ``phase`` (and to ``record``'s own)."""
+        seconds = time.perf_counter() - start
+        self.timings[phase] = self.timings.get(phase, 0.0) + seconds
+        if record is not None:
+            record.seconds[phase] = record.seconds.get(phase, 0.0) + seconds
+        return seconds
 
     def _rotate(self, step: Rotate) -> None:
         latest = self.latest
@@ -160,6 +181,9 @@ class Walk:
 
     def _colorspace(self, step: Colorspace) -> None:
         params = step.params
+        if self.mode == "check":
+            for name in (params["dst"], params["src"]):
+                check_colorspace_name(name, params["config"])
         self._pixel_step(lambda env: _apply_colorspace(env, **params),
                          (params["dst"], params["config"]))  # fmt: skip
 
@@ -206,21 +230,27 @@ class Walk:
             if self.mode == "run":
                 from ..resample.convert import convert
 
+                start = time.perf_counter()
                 env = convert(self.source, **kwargs)
-                size = env.size
+                size, channels = env.size, env.channels
             else:
                 from ..resample.convert import default_size
+                from ..resample.options import output_channels
 
                 size = kwargs.get("size") or default_size(
                     SimpleNamespace(size=self.source.size, layout=self.source.layout), layout,
-                    kwargs.get("out_convention"),
+                    kwargs.get("out_convention"), mips=mips, guard=kwargs.get("guard", 0),
                 )  # fmt: skip
+                channels = output_channels(self.source.channels, kwargs.get("alpha", False))
             width, height = layout.file_size(size, guard)
             record = Output(self.input, layout.name, int(size), guard, width, height,
-                            count_levels(width, height, mips))  # fmt: skip
+                            count_levels(width, height, mips), channels=tuple(channels))  # fmt: skip
+            if self.mode == "run":
+                self._add_time("resample", start, record)
             record.envmap = env if self.keep else None
             self.outputs.append(record)
-        self.latest = _Latest(record, env, layout.name, space=self.source_space)
+        self.latest = _Latest(record, env, layout.name, space=self.source_space,
+                              request={**kwargs, "mips": mips})  # fmt: skip
 
     def _write(self, step: Write) -> None:
         self._check_template(step)
@@ -255,14 +285,20 @@ class Walk:
         if layout is not None and not self.latest.is_source:
             try:
                 io.output_paths(layout, template, faces=step.options.get("faces"))
+                if self.mode == "check":
+                    check_levels(layout, template, self.latest.request or {})
             except EnvconvError as exc:
                 raise UsageError(f"{self._where(step)}: path: {exc}") from None
+        if self.mode == "check":
+            options = step.options
+            check_colorspace_name(options.get("output_colorspace"), options.get("ocio_config"))
 
     def _write_source(self) -> None:
         record, src = None, self.source
         if self.mode != "check":
             width, height = src.layout.file_size(src.size, src.guard)
-            record = Output(self.input, src.layout.name, src.size, src.guard, width, height)
+            record = Output(self.input, src.layout.name, src.size, src.guard, width, height,
+                            channels=tuple(src.channels))  # fmt: skip
             if self.keep and self.mode == "run":
                 record.envmap = src
             self.outputs.append(record)
@@ -280,18 +316,19 @@ class Walk:
             options["output_colorspace"] = latest.space[0]
             if latest.space[1] and not options.get("ocio_config"):
                 options["ocio_config"] = latest.space[1]
-        files = _output_paths(record.layout, path, record.levels, options.get("faces"))
+        plan = io.plan_write(record.layout, path, record.size, record.guard, record.levels,
+                             record.channels, self.source.pixel_type, working_space(),
+                             **options)  # fmt: skip
+        record.writes.append(plan)
         preview = (
             step.target(variables, "preview", self.variables) if step.params["preview"] else None
         )
-        self.targets += [
-            (f, step.params["no_clobber"]) for f in [*files, *([preview] if preview else [])]
-        ]
-        if self.mode == "plan":
-            _check_output_settings(path, options)
-            files = [*files, *([preview] if preview else [])]
-        else:
+        files = [*plan.files, *([preview] if preview else [])]
+        self.targets += [(f, step.params["no_clobber"]) for f in files]
+        if self.mode == "run":
+            start = time.perf_counter()
             files = self._write_env(step, latest.env, path, preview, options)
+            self._add_time("write", start, record)
         self.written.extend(files)
         record.files.extend(files)
 
@@ -322,24 +359,12 @@ def _written_later(steps: list[Step], index: int) -> bool:
     return False
 
 
-def _check_output_settings(path: str, options: dict[str, Any]) -> None:
-    """Fail before any pixel on a bad bit depth, compression or output colour space."""
-    from ..io.encode import plan_output
-
-    plan_output(path, "float", {}, options.get("output_colorspace"), options.get("bit_depth"),
-                options.get("ocio_config"), options.get("compression"))  # fmt: skip
-
-
 def _write_preview(env, path: str) -> str:
     """A tone-mapped 8-bit picture of ``env`` at ``path`` (a write step's ``preview``)."""
     from ..io.picture import write_picture
     from ..views.preview import preview_picture
 
     return write_picture(preview_picture(env), path)
-
-
-def _output_paths(layout: str, path: str, levels: int, faces=None) -> list[str]:
-    return io.output_paths(layout, path, levels, faces=faces)
 
 
 def _apply_exposure(env, stops: float):

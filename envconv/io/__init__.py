@@ -6,6 +6,8 @@ face file, through a temporary file renamed into place. The modules:
 
 * :mod:`~envconv.io.reader`: maps from files (one file, ``{face}`` sets, parts, levels);
 * :mod:`~envconv.io.writer`: maps to files, and :func:`write_bytes` for made containers;
+* :mod:`~envconv.io.write_plan`: what a write will store (files, pixel type, channels,
+  levels), asked by the writer and by every plan before any pixel;
 * :mod:`~envconv.io.specs`: what a written image carries (channels, tags, its ImageSpec);
 * :mod:`~envconv.io.temps`: the temporary files of writes (names, live ones, stale ones);
 * :mod:`~envconv.io.probe`: a map's facts from its headers alone (``envconv info``);
@@ -24,8 +26,8 @@ from __future__ import annotations
 import importlib
 
 __all__ = ["read", "read_unplaced", "read_header", "read_image", "read_pixel_type", "mip_levels",
-           "probe", "Probe", "write", "write_bytes", "output_paths", "FORMATS", "WRITE_FORMATS",
-           "COMPRESSIONS"]  # fmt: skip
+           "probe", "Probe", "write", "write_bytes", "output_paths", "plan_write", "check_write", "WritePlan",
+           "FORMATS", "WRITE_FORMATS", "COMPRESSIONS"]  # fmt: skip
 
 # Where each public name lives. Loaded on first use, so importing one submodule (e.g.
 # envconv.io.files for a header) does not import the readers, the writers and the layouts.
@@ -33,7 +35,8 @@ _HOMES = {
     **dict.fromkeys(("read", "read_unplaced", "read_header", "read_image", "read_pixel_type",
                      "mip_levels"), "reader"),
     **dict.fromkeys(("probe", "Probe"), "probe"),
-    **dict.fromkeys(("write", "write_bytes", "output_paths"), "writer"),
+    **dict.fromkeys(("write", "write_bytes"), "writer"),
+    **dict.fromkeys(("output_paths", "plan_write", "check_write", "WritePlan"), "write_plan"),
     **dict.fromkeys(("FORMATS", "WRITE_FORMATS", "COMPRESSIONS"), "formats"),
 }  # fmt: skip
 

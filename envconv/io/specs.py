@@ -17,6 +17,7 @@ from ..layouts.grids import CENTRES, tagged_grid
 from .exr_header import PLACEHOLDER
 from .files import _oiio
 from .formats import choose_pixel_type, format_of
+from .write_plan import stored_channels
 
 __all__ = ["LevelImage", "level_image", "image_spec", "set_mip_attributes"]
 
@@ -57,21 +58,17 @@ def level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, le
                  channels=None):  # fmt: skip
     """The :class:`LevelImage` of one image of ``envmap`` written to ``target`` (of one of
     its parts when ``channels`` names that part's channels)."""
-    fmt, _, _, max_channels = format_of(target)
+    fmt = format_of(target)[0]
     pixel_type = choose_pixel_type(target, envmap.pixel_type, bit_depth)
     channels = list(envmap.channels if channels is None else channels)
-    if max_channels is not None and len(channels) > max_channels:
-        log.warning(
-            "%s stores at most %d channels; writing %s",
-            fmt,
-            max_channels,
-            ",".join(channels[:max_channels]),
-        )
-        pixels = _take(pixels, range(max_channels))
-        channels = channels[:max_channels]
-    if fmt == "hdr" and len(channels) != 3:
-        pixels = _take(pixels, [0, 0, 0])
-        channels = ["R", "G", "B"]
+    kept = list(stored_channels(target, channels))
+    if len(kept) < len(channels):
+        log.warning("%s stores at most %d channels; writing %s", fmt, len(kept), ",".join(kept))
+    if len(kept) <= len(channels) and kept != channels:
+        pixels = _take(pixels, range(len(kept)))
+    elif len(kept) > len(channels):  # Radiance HDR: one channel repeated into RGB
+        pixels = _take(pixels, [0] * len(kept))
+    channels = kept
     nch = pixels.shape[2]
     alpha = alpha_channel(channels[:nch])
     attributes: list[tuple[str, Any]] = []

@@ -15,10 +15,10 @@ import logging
 
 import numpy as np
 
-from ..errors import ImageIOError
 from ..layouts import Layout
 from ..layouts.base import FAMILY_CUBE_GL
 from .formats import CONTAINER_FORMATS  # the table lives with the other formats'
+from .write_plan import container_levels
 
 __all__ = ["CONTAINER_FORMATS", "cube_faces", "texture_images", "encode_texture"]
 
@@ -54,19 +54,14 @@ def _rgba(pixels: np.ndarray, alpha_index: int | None) -> np.ndarray:
     return np.ascontiguousarray(np.concatenate([rgb, alpha], axis=2))
 
 
-def texture_images(layout: Layout, guard: int, levels: list[np.ndarray],
+def texture_images(layout: Layout, levels: list[np.ndarray],
                    alpha_index: int | None) -> tuple[list[list[np.ndarray]], bool]:  # fmt: skip
     """(images[f][k] RGBA, cube) for a container: six faces for a cube layout, else one image.
 
-    ``levels`` are the map's mip levels (level 0 first) as they are to be stored.
+    ``levels`` are the map's mip levels (level 0 first) as they are to be stored; the writer
+    has refused what a container cannot hold (:func:`envconv.io.write_plan.check_write`).
     """
     cube = layout.family == FAMILY_CUBE_GL
-    if cube and guard:
-        raise ImageIOError(
-            f"DDS and KTX2 cube maps have no guard ring; write {layout.name} without --guard"
-        )
-    if not cube and layout.multi_file:
-        raise ImageIOError(f"DDS and KTX2 hold one image or one cube, not {layout.name}'s files")
     if cube:
         levels = _whole_face_levels(layout, levels)
         per_level = [cube_faces(layout, level) for level in levels]
@@ -84,14 +79,7 @@ def _whole_face_levels(layout: Layout, levels: list[np.ndarray]) -> list[np.ndar
     stored as cube faces.
     """
     n = levels[0].shape[0] // layout.rows
-    kept = []
-    for k, level in enumerate(levels):
-        side = max(n >> k, 1)
-        if level.shape[:2] != (layout.rows * side, layout.columns * side) or (
-            k and side == 1 and n >> k == 0
-        ):
-            break
-        kept.append(level)
+    kept = levels[: container_levels(layout, n, len(levels))]
     if n >> (len(kept) - 1) > 1 and len(kept) < len(levels):
         log.warning(
             "faces of %d texels halve into whole texels for %d levels only; the cube "

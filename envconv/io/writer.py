@@ -15,68 +15,19 @@ from dataclasses import replace
 import numpy as np
 
 from ..envmap import EnvMap
-from ..errors import ImageIOError, LayoutError
-from ..layouts import get_layout
+from ..errors import ImageIOError
 from .chatter import library_output
 from .exr_header import PLACEHOLDER, store_sampleborder
-from .face_files import face_path
 from .files import _first_line, _oiio
-from .formats import CONTAINER_FORMATS, format_of
+from .formats import format_of
 from .specs import LevelImage, image_spec, level_image, set_mip_attributes
 from .temps import discard as _discard
 from .temps import temp_for as _temp_path
+from .write_plan import check_write, face_names, output_paths
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
 
 log = logging.getLogger(__name__)
-
-
-def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=None) -> list[str]:
-    """Files that writing a map of this layout to ``path`` produces.
-
-    With ``{level}`` in the path every one of ``levels`` mip levels is a file of its own
-    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``. ``faces``
-    names the files of a ``cube-faces`` map by a face set (:mod:`envconv.layouts.facesets`). A DDS or
-    KTX2 file holds every face and level itself.
-    """
-    path = os.fspath(path)
-    if os.path.splitext(path)[1].lower() in CONTAINER_FORMATS:
-        if "{level}" in path or "{face}" in path:
-            raise LayoutError(f"{path}: a DDS or KTX2 file holds every face and level; "
-                              "drop {face} and {level} from the path")  # fmt: skip
-        return [path]
-    if "{level}" in path:
-        return [
-            p
-            for k in range(max(int(levels), 1))
-            for p in output_paths(envmap_layout, path.replace("{level}", str(k)), faces=faces)
-        ]
-    layout = get_layout(envmap_layout)
-    names = _face_names(layout, faces)
-    if layout.multi_file:
-        if "{face}" not in path:
-            raise LayoutError(
-                f"layout {layout.name} writes {len(layout.face_names)} files; "
-                "put {face} in the output path, e.g. sky_{face}.exr"
-            )
-        return [face_path(path, name) for name in names]
-    if "{face}" in path:
-        raise LayoutError(
-            f"{{face}} in the output path needs a multi-file layout, not {layout.name}"
-        )
-    return [path]
-
-
-def _face_names(layout, faces) -> tuple[str, ...]:
-    """File-name parts of a layout's faces, or of a face set's files (cube-faces only)."""
-    if faces is None:
-        return layout.face_names
-    from ..layouts.facesets import get_face_set
-
-    face_set = get_face_set(faces)
-    if layout.name != "cube-faces":
-        raise LayoutError(f"face set {face_set.name} applies to cube-faces, not {layout.name}")
-    return face_set.names
 
 
 def write(
@@ -128,7 +79,7 @@ def write(
     paths = output_paths(envmap.layout, path, len(levels) if per_level else 1, faces=faces)
     layout = envmap.layout
     cells = [_cells(layout, level, faces) for level in levels]
-    names = list(_face_names(layout, faces)) if layout.multi_file else [None]
+    names = list(face_names(layout, faces)) if layout.multi_file else [None]
     if per_level:
         jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
     else:
@@ -178,7 +129,8 @@ def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarra
     from .textures import encode_texture, texture_images
 
     output_paths(envmap.layout, path)
-    images, cube = texture_images(envmap.layout, envmap.guard, levels, envmap.alpha_index)
+    check_write(envmap.layout, path, guard=envmap.guard)
+    images, cube = texture_images(envmap.layout, levels, envmap.alpha_index)
     extra = {"envconv:layout": envmap.layout.name}
     if "envconv:roughness" in envmap.metadata:
         extra["envconv:roughness"] = str(envmap.metadata["envconv:roughness"])
@@ -226,16 +178,7 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
         from ..resample.mips import full_level_count
 
         full = full_level_count(images[0].shape[1], images[0].shape[0])
-        if fmt not in ("openexr", "tiff"):
-            raise ImageIOError(
-                f"cannot write {target}: {fmt} holds one image, not {len(images)} MIP levels; "
-                "put {level} in the path for one file per level, e.g. sky_{level}.png"
-            )
-        if fmt == "openexr" and len(images) != full:
-            raise ImageIOError(
-                f"cannot write {target}: a MIP-mapped OpenEXR holds all {full} levels down to "
-                f"1x1, not {len(images)}; ask for the full chain or put {{level}} in the path"
-            )
+        check_write(envmap.layout, target, len(images), full, envmap.guard)
     if envmap.parts:
         writes = _part_writes(target, images[0], envmap, face, bit_depth, compression, level)
     else:

@@ -60,6 +60,7 @@ from .options import (
     check_mips,
     check_samples,
     default_size,
+    output_channels,
 )
 from .regrid import check_output_grid, output_on_grid, source_on_centres
 
@@ -187,7 +188,7 @@ def _resample(
     if filter not in FILTERS:
         raise UsageError(f"unknown filter {filter!r}; choose one of {', '.join(FILTERS)}")
     if size is None:
-        size = default_size(envmap, to, cout)
+        size = default_size(envmap, to, cout, mips=_chain_request(mips, ggx), guard=guard)
     if not isinstance(size, (int, np.integer)) or size < 1:
         raise LayoutError(f"size must be a positive integer, got {size!r}")
     n_samples = check_samples(samples)
@@ -206,7 +207,6 @@ def _resample(
     rot = np.ascontiguousarray(rot)
 
     width, height = to.image_size(size, guard_px)
-    channels = list(envmap.channels)
     src = envmap.pixels
     alpha_index = envmap.alpha_index
     # An appended alpha channel of a single level is the kernel's coverage, written in place.
@@ -273,12 +273,9 @@ def _resample(
         else:
             chain, rough = ibl.ggx_levels(envmap, to, size, guard_px, fill, rot, chain, roughness)
             metadata["envconv:roughness"] = " ".join(f"{r:.6g}" for r in rough)
-    if alpha:
-        if direct_alpha:
-            channels.append("A")
-        elif alpha_index is None:
+    if alpha and not direct_alpha:
+        if alpha_index is None:
             chain = [(np.concatenate([o, c[:, :, None]], axis=2), c) for o, c in chain]
-            channels.append("A")
         else:
             for o, c in chain:
                 o[:, :, alpha_index] = c
@@ -290,7 +287,7 @@ def _resample(
         out,
         to,
         guard=guard_px,
-        channels=tuple(channels),
+        channels=output_channels(envmap.channels, alpha),
         metadata=metadata,
         pixel_type=envmap.pixel_type,
         levels=[o for o, _ in chain] if mips else None,
@@ -319,7 +316,8 @@ def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False
         layout = get_layout(to)
         chain, _ = _mip_filter(mips)
         if size is None:
-            size = default_size(envmap, layout, resolve_convention(out_convention, layout))
+            size = default_size(envmap, layout, resolve_convention(out_convention, layout),
+                                mips=mips, guard=guard)  # fmt: skip
         guard_px = 0 if guard == "fill" else check_guard(guard)
     except (UsageError, LayoutError, ValueError, TypeError):
         return None
@@ -364,6 +362,13 @@ def _copy_covered(out: np.ndarray, src: np.ndarray, coverage: np.ndarray) -> Non
 def _mip_filter(mips):
     """(mips for the chain builder, True for GGX) of ``convert``'s ``mips``."""
     return check_mips(mips)
+
+
+def _chain_request(levels, ggx: bool):
+    """``mips`` as :func:`check_mips` takes it again, from its (levels, ggx)."""
+    if levels is None:
+        return None
+    return ("ggx" if ggx else "box") + ("" if levels is True else f":{levels}")
 
 
 def source_rips(

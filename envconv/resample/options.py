@@ -1,6 +1,7 @@
-"""The rules a resample's options follow: the default output size, the automatic sub-sample
-count of a mip chain, the filters, and the checks of ``samples``, ``guard`` and ``mips`` (the
-one home of those checks: the library, the command line and graph files all call them).
+"""The rules a resample's options follow: the default output size (also with a mip chain), the
+automatic sub-sample count, the output's channels, the filters, and the checks of
+``samples``, ``guard`` and ``mips`` (the one home of those checks: the library, the command
+line and graph files all call them).
 
 Shared by :mod:`envconv.resample.convert` and :mod:`envconv.resample.mips` (which neither imports the other for
 them). Sizes are characteristic sizes N; pitches are those of :func:`envconv.layouts.geometry.horizon_pitch`.
@@ -11,28 +12,53 @@ from __future__ import annotations
 import math
 import numbers
 
-from ..envmap import EnvMap
+from ..envmap import EnvMap, alpha_channel
 from ..errors import UsageError
 from ..layouts import Layout, get_layout
 from ..layouts.conventions import resolve_convention
 from ..layouts.geometry import horizon_pitch
 
 __all__ = ["FILTERS", "MAX_SAMPLES", "default_size", "auto_samples", "check_samples", "check_guard",
-           "check_mips"]  # fmt: skip
+           "check_mips", "output_channels"]  # fmt: skip
 
 #: Reconstruction filters by name → kernel code.
 FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
 MAX_SAMPLES = 32
 
 
-def default_size(source: EnvMap, to: Layout | str, out_convention=None) -> int:
-    """Output N that keeps the source's horizon pitch (see module docstring), or the rule of
-    ``out_convention``'s tool: ``pbrt`` makes the square as wide as the lat-long would be."""
+def default_size(source: EnvMap, to: Layout | str, out_convention=None, mips=None,
+                 guard=0) -> int:  # fmt: skip
+    """Output N when none is given: the N that keeps the source's angular pixel pitch along
+    the horizon (``source N × pitch(source) / pitch(to)``, pitches of
+    :func:`envconv.layouts.geometry.horizon_pitch`: a 2048 × 1024 lat-long gives cube faces
+    of 559), or the rule of ``out_convention``'s tool (``pbrt`` makes the square as wide as
+    the lat-long would be).
+
+    With a MIP chain (``mips`` as :func:`check_mips` takes it) N is then rounded so that every
+    level holds whole cells: N + 2G (``guard``) becomes the nearest power of two for a full
+    chain (cells halve exactly until they are one texel: 559 becomes 512), or the nearest
+    multiple of 2^(K − 1) for K levels. A given size is never changed."""
     to = get_layout(to)
     if resolve_convention(out_convention, to).size_rule == "latlong-width":
-        return 2 * default_size(source, "latlong")
-    n = source.size * horizon_pitch(to) / horizon_pitch(source.layout)
-    return max(1, int(round(n)))
+        n = 2 * default_size(source, "latlong")
+    else:
+        n = max(1, int(round(source.size * horizon_pitch(to) / horizon_pitch(source.layout))))
+    levels = check_mips(mips)[0]
+    if levels is None:
+        return n
+    guard = 0 if guard == "fill" else check_guard(guard)
+    cell = n + 2 * guard
+    if levels is True:
+        low = 1 << (cell.bit_length() - 1)
+        cell = low if cell * cell < 2 * low * low else 2 * low  # nearer in log2; ties go up
+        while cell - 2 * guard < 1:
+            cell *= 2
+        return cell - 2 * guard
+    step = 1 << (levels - 1)
+    cell = max(step, round(cell / step) * step)
+    while cell - 2 * guard < 1:
+        cell += step
+    return cell - 2 * guard
 
 
 def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float = 1.0) -> int:
@@ -89,3 +115,13 @@ def check_mips(mips) -> tuple[bool | int | None, bool]:
     if isinstance(mips, numbers.Integral) and mips >= 0:
         return (True if mips == 0 else int(mips)), False
     raise UsageError(f"mips must be True or a number of levels, got {mips!r}")
+
+
+def output_channels(channels, alpha: bool) -> tuple[str, ...]:
+    """The channels of a resample's output: the source's, every one resampled, with ``A``
+    appended when ``alpha`` asks for coverage and the source has no alpha channel (an
+    existing one is overwritten with the coverage)."""
+    channels = tuple(channels)
+    if alpha and alpha_channel(channels) is None:
+        return (*channels, "A")
+    return channels
