@@ -33,11 +33,13 @@ LAYERS = [
 #: encode or an allocation before it happens.
 SERVICES = {"envconv.resample.kernels": "foundation", "envconv.engine.memory": "foundation"}
 #: The upward imports allowed, each by name and why. The memory guard estimates a conversion
-#: from the layout and its MIP sizes; the writer asks the chain's level count of its one home.
+#: from the layout and its MIP sizes; the writer, and its plan of what it will write, ask the
+#: chain's level count of its one home.
 ALLOWED_UP = {
     ("envconv.engine.memory", "envconv.layouts"),
     ("envconv.engine.memory", "envconv.resample.mips"),
     ("envconv.io.writer", "envconv.resample.mips"),
+    ("envconv.io.write_plan", "envconv.resample.mips"),
 }
 #: Third-party libraries and the only modules (prefixes) that may import them.
 LIBRARY_HOMES = {

@@ -1,5 +1,5 @@
-"""What the walker (:mod:`envconv.engine.walk`) checks before any file is opened: colour-space
-names and MIP chains the output paths cannot hold. Both are bad usage (UsageError, exit 2),
+"""What the walker (:mod:`envconv.engine.walk`) checks before any pixel is read: colour-space
+names, conventions and MIP chains the output paths cannot hold. Both are bad usage (UsageError, exit 2),
 refused in the walker's check mode, so that a chain, ``convert``, a graph file and a batch
 refuse them before any work, whatever reads the steps.
 """
@@ -12,7 +12,7 @@ from .. import io
 from ..layouts import get_layout
 from .steps import count_levels
 
-__all__ = ["check_colorspace_name", "check_levels", "working_space"]
+__all__ = ["check_colorspace_name", "check_levels", "check_conventions", "working_space"]
 
 
 def working_space() -> dict[str, str]:
@@ -47,3 +47,13 @@ def check_levels(layout: str, template: str, request: dict[str, Any]) -> None:
         full = count_levels(width, height, True)
         count = count_levels(width, height, request.get("mips"))
     io.check_write(layout, template, count, full, guard)
+
+
+def check_conventions(kwargs: dict[str, Any], source_layout=None) -> None:
+    """Refuse a resample's conventions that do not fit its layouts (the output's from the
+    arguments; the input's once ``source_layout`` is known from the header), with the rule of
+    :func:`envconv.resample.options.check_conventions`."""
+    from ..resample.options import check_conventions as check
+
+    check(kwargs["to"], kwargs.get("out_convention"), kwargs.get("mips"), source_layout,
+          kwargs.get("in_convention"), kwargs.get("guard", 0))  # fmt: skip

@@ -22,7 +22,7 @@ from typing import Any
 from .. import io
 from ..errors import EnvconvError, ImageIOError, UsageError
 from ..layouts import get_layout
-from .checks import check_colorspace_name, check_levels, working_space
+from .checks import check_colorspace_name, check_conventions, check_levels, working_space
 from .steps import (
     _IO_PLACEHOLDERS,
     VARIABLES,
@@ -152,7 +152,8 @@ class Walk:
         elif self.mode == "plan":
             self.source = SourceHeader(self.input, step.read_options)
         else:
-            self.source = SimpleNamespace()
+            layout = step.read_options.get("layout")
+            self.source = SimpleNamespace(layout=None if layout is None else get_layout(layout))
             options = step.read_options
             check_colorspace_name(options.get("input_colorspace"), options.get("ocio_config"))
         self.rotation, self.latest, self.source_space = None, None, None
@@ -224,6 +225,8 @@ class Walk:
     def _make_output(self, to: str, kwargs: dict[str, Any], mips: Any) -> None:
         layout = get_layout(to)
         record, env = None, None
+        if self.mode != "run" and "to" in kwargs:
+            check_conventions({**kwargs, "mips": mips}, getattr(self.source, "layout", None))
         if self.mode != "check":
             guard = kwargs.get("guard", 0)
             guard = 0 if guard == "fill" else int(guard)

@@ -56,13 +56,14 @@ from .options import (
     FILTERS,
     MAX_SAMPLES,
     auto_samples,
+    check_conventions,
     check_guard,
     check_mips,
     check_samples,
     default_size,
     output_channels,
 )
-from .regrid import check_output_grid, output_on_grid, source_on_centres
+from .regrid import output_on_grid, source_on_centres
 
 __all__ = ["convert", "default_size", "auto_samples", "source_rips", "rip_row_cap",
            "memory_needed", "FILTERS", "MAX_SAMPLES"]  # fmt: skip
@@ -172,13 +173,9 @@ def _resample(
     """:func:`convert` of a map without holes or parts."""
     to = get_layout(to)
     mips, ggx = _mip_filter(mips)
-    cin = resolve_convention(in_convention, envmap.layout)
-    cout = resolve_convention(out_convention, to)
+    cin, cout = check_conventions(to, out_convention, mips, envmap.layout, in_convention, guard)
     # Sample grids (mitsuba, openexr-edges): resampled on envconv's centres (.regrid).
     envmap = source_on_centres(envmap, None if in_convention is None else cin)
-    check_output_grid(cout, mips, guard)
-    if cout.remap is not None and mips:
-        raise UsageError(f"out_convention {cout.name} moves cells; it cannot be used with mips")
     if cin.remap is not None:
         envmap = replace(
             envmap, pixels=apply_remap(envmap.layout, envmap.pixels, envmap.guard, cin.remap)

@@ -19,7 +19,7 @@ from ..layouts.conventions import resolve_convention
 from ..layouts.geometry import horizon_pitch
 
 __all__ = ["FILTERS", "MAX_SAMPLES", "default_size", "auto_samples", "check_samples", "check_guard",
-           "check_mips", "output_channels"]  # fmt: skip
+           "check_mips", "check_conventions", "output_channels"]  # fmt: skip
 
 #: Reconstruction filters by name → kernel code.
 FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
@@ -125,3 +125,25 @@ def output_channels(channels, alpha: bool) -> tuple[str, ...]:
     if alpha and alpha_channel(channels) is None:
         return (*channels, "A")
     return channels
+
+
+def check_conventions(to: Layout | str, out_convention=None, mips=None, source=None,
+                      in_convention=None, guard=0):  # fmt: skip
+    """(in, out) :class:`~envconv.layouts.conventions.Convention` of a resample to ``to`` from
+    a ``source`` layout (None: not known yet, the input convention is not resolved), or
+    UsageError: a convention named for a layout it does not apply to, an output convention
+    that moves cells with a mip chain (its levels would mix moved cells), and one on another
+    sample grid with a mip chain or a guard ring (:func:`envconv.resample.regrid.check_output_grid`)."""
+    from ..errors import LayoutError
+    from .regrid import check_output_grid
+
+    try:
+        cout = resolve_convention(out_convention, to)
+        cin = None if source is None else resolve_convention(in_convention, source)
+    except LayoutError as exc:
+        raise UsageError(str(exc)) from None
+    chain = check_mips(mips)[0] is not None
+    check_output_grid(cout, chain, guard)
+    if cout.remap is not None and chain:
+        raise UsageError(f"out_convention {cout.name} moves cells; it cannot be used with mips")
+    return cin, cout
