@@ -906,3 +906,69 @@ def test_nan_to_an_integer_format_prints_envconv_lines_only(tmp_path, output):
         line.startswith("envconv: warning: ") for line in run.stderr_lines
     ), run.stderr
     assert "RuntimeWarning" not in run.stderr
+
+
+# --- contradicting options: exit 2 before any work (docs/shell.md, exit statuses) ---------------
+# Each case runs on an input whose header is whole and whose pixels are cut off: reading a
+# pixel would fail with status 1 ("cannot read"), so status 2 with the contradiction's message
+# proves that it was found first, from arguments and headers alone; nothing is written.
+
+
+def _cut_pixels(tmp_path):
+    data = _noise_exr(tmp_path / "whole.exr", 16).read_bytes()
+    source = tmp_path / "cut.exr"
+    source.write_bytes(data[: len(data) * 2 // 3])
+    (tmp_path / "whole.exr").unlink()
+    return source
+
+
+@pytest.mark.parametrize("out, args, message", [
+    ("o.exr", ["--mips", "3", "--size", "8"], "all 5 levels"),     # OpenEXR holds full chains
+    ("o.exr", ["--mips", "3"], "levels down to 1x1"),              # (size from the header)
+    ("o.png", ["--mips"], "png holds one image"),                  # a chain needs {level}
+    ("o.jpg", ["--mips", "2", "--size", "8"], "put {level} in the path"),
+    ("o.hdr", ["--mips", "ggx"], "hdr holds one image"),
+    ("o.dds", ["--to", "cube-hcross", "--guard", "2"], "no guard ring"),
+    ("o.ktx2", ["--to", "paraboloid-split"], "one image or one cube"),
+    ("o.exr", ["--output-colorspace", "no-such-space"], "unknown colour space"),
+    ("o.exr", ["--input-colorspace", "no-such-space"], "unknown colour space"),
+    ("o.exr", ["--out-convention", "ddgi"], "applies to octahedral"),
+    ("o.exr", ["--in-convention", "ddgi"], "applies to octahedral"),   # the header's latlong
+    ("o_{face}.exr", ["--to", "cube-faces", "--out-convention", "openexr", "--mips"],
+     "moves cells"),
+    ("o.exr", ["--up", "z", "--axes", "x,y,z"], "not both"),
+])  # fmt: skip
+def test_contradicting_options_exit_2_before_any_work(tmp_path, out, args, message):
+    source = _cut_pixels(tmp_path)
+    to = [] if "--to" in args else ["--to", "latlong"]
+    size = [] if "--size" in args or "--mips" in args else ["--size", "8"]
+    run = envconv("convert", source, tmp_path / out, *to, *size, *args)
+    assert_failed_cleanly(run, 2, tmp_path, message=message)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["cut.exr"]
+
+
+def test_the_cut_input_fails_as_a_read_without_a_contradiction(tmp_path):
+    """The control for the cases above: the same input and arguments without the
+    contradiction read pixels and fail with status 1."""
+    source = _cut_pixels(tmp_path)
+    run = envconv("convert", source, tmp_path / "o_{level}.png", "--to", "latlong", "--mips")
+    assert_failed_cleanly(run, 1, tmp_path, message="cannot read")
+
+
+@pytest.mark.parametrize("command", ["chain", "batch", "graph"])
+def test_a_chain_a_batch_and_a_graph_file_refuse_a_contradiction_before_any_job(tmp_path,
+                                                                                 command):  # fmt: skip
+    source = _cut_pixels(tmp_path)
+    if command == "chain":
+        run = envconv("read", source, "resample", "--to", "sphere", "--mips", "write",
+                      tmp_path / "o.png")  # fmt: skip
+    elif command == "batch":
+        run = envconv("batch", source, "--out", str(tmp_path / "o.png"), "resample", "--to",
+                      "sphere", "--mips")  # fmt: skip
+    else:
+        graph = tmp_path / "g.toml"
+        graph.write_text('inputs = ["cut.exr"]\n[[steps]]\nstep = "resample"\nto = "sphere"\n'
+                         'mips = true\n[[steps]]\nstep = "write"\npath = "o.png"\n')  # fmt: skip
+        run = envconv("run", graph)
+    assert_failed_cleanly(run, 2, tmp_path, message="png holds one image")
+    assert not (tmp_path / "o.png").exists()

@@ -222,3 +222,36 @@ def test_other_outputs(sky, tmp_path):
     np.testing.assert_array_equal(back.pixels, env.levels[1])
     with pytest.raises(envconv.UsageError, match="level"):  # a chain, one image per file
         io.write(env, tmp_path / "sky_{face}.png")
+
+
+@pytest.mark.parametrize("name, height, mips, guard", [
+    ("cube-vcross", 96, True, 0), ("latlong", 40, True, 0), ("paraboloid", 64, True, 2),
+    ("cube-faces", 96, "ggx", 0), ("sphere", 50, 3, 0), ("tennisball", 72, 4, 1),
+])  # fmt: skip
+def test_without_a_size_a_chain_gets_whole_cells_at_every_level(name, height, mips, guard):
+    """No --size: the size that keeps the horizon pitch, rounded so that N + 2G halves into
+    whole texels at every level (a power of two for a full chain, a multiple of 2^(K-1) for K
+    levels), within a factor √2 of the size without a chain."""
+    source = _latlong_of(smooth_radiance, height)
+    plain = envconv.convert(source, name, guard=guard, samples=1)
+    chain = envconv.convert(source, name, guard=guard, mips=mips, samples=1)
+    layout = envconv.layouts.get_layout(name)
+    n, cell = chain.size, chain.size + 2 * guard
+    assert 2**-0.5 <= n / plain.size <= 2**0.5
+    levels = len(chain.levels)
+    if mips in (True, "ggx"):
+        assert cell & (cell - 1) == 0, cell
+    else:
+        assert levels == mips and cell % 2 ** (mips - 1) == 0, cell
+    cw = layout.aspect * n + 2 * guard
+    for k, level in enumerate(chain.levels):
+        if cell >> k == 0:
+            break
+        # Cell borders fall on texel borders: level k is rows x columns cells of exactly
+        # (N + 2G) >> k rows (and (aspect N + 2G) >> k columns where cells sit side by side;
+        # a one-column layout's cell is the whole width). Multi-file layouts: per file.
+        rows, columns = (1, 1) if layout.multi_file else (layout.rows, layout.columns)
+        files = layout.columns if layout.multi_file else 1
+        assert cell % 2**k == 0 and level.shape[0] == rows * (cell >> k), (k, level.shape)
+        if columns > 1 or layout.multi_file:
+            assert cw % 2**k == 0 and level.shape[1] == files * columns * (cw >> k), k

@@ -52,8 +52,10 @@ def check_levels(layout: str, template: str, request: dict[str, Any]) -> None:
 def check_conventions(kwargs: dict[str, Any], source_layout=None) -> None:
     """Refuse a resample's conventions that do not fit its layouts (the output's from the
     arguments; the input's once ``source_layout`` is known from the header), with the rule of
-    :func:`envconv.resample.options.check_conventions`."""
+    :func:`envconv.resample.options.check_conventions`, and ``--up z`` with ``--axes``."""
+    from ..layouts.conventions import environment_axes
     from ..resample.options import check_conventions as check
 
+    environment_axes(kwargs.get("up"), kwargs.get("axes"))  # --up z with --axes
     check(kwargs["to"], kwargs.get("out_convention"), kwargs.get("mips"), source_layout,
           kwargs.get("in_convention"), kwargs.get("guard", 0))  # fmt: skip
