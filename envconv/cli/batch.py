@@ -16,7 +16,7 @@ from ..engine.batch import BatchInterrupted, expand_inputs, make_jobs, run_batch
 from ..engine.graph import load_graph
 from ..engine.pipeline import Pipeline, Resample, Write
 from .main import cli
-from .options import no_clobber_option
+from .options import echo_document, json_option, no_clobber_option
 from .progress import Progress, summary_line
 
 __all__ = ["batch_command", "batch_options", "BatchSpec", "run_batch_command", "execute"]
@@ -28,6 +28,7 @@ BATCH_OPTIONS = [
     click.option("--report", "report", metavar="FILE.json", help="Write one JSON record per input (status, outputs, seconds, error)."),
     click.option("--dask", "dask", metavar="SCHEDULER", help="Run the jobs on a Dask cluster (tcp://host:8786); needs envconv[dask]."),
     click.option("--dry-run", is_flag=True, help="Print every output (layout, size, levels, files) without reading pixels."),
+    json_option,
     no_clobber_option,
 ]  # fmt: skip
 
@@ -117,12 +118,13 @@ def run_batch_command(spec: BatchSpec, steps: list) -> None:
 
 
 def execute(jobs, workers=1, skip_existing=False, update=False, report=None, dask=None,
-            dry_run=False) -> None:  # fmt: skip
-    """Run (or with ``dry_run`` plan) ``jobs`` with progress, summary and report."""
+            dry_run=False, as_json=False, command="batch") -> None:  # fmt: skip
+    """Run (or with ``dry_run`` plan) ``jobs`` with progress, summary and report; with
+    ``as_json`` the summary is one JSON document of ``command`` on stdout."""
     if skip_existing and update:
         raise click.UsageError("--skip-existing and --update exclude each other")
     if dry_run:
-        _print_plan(jobs)
+        _print_plan(jobs, command if as_json else None)
         return
     if workers == 0:
         from ..engine.batch import worker_threads
@@ -140,25 +142,40 @@ def execute(jobs, workers=1, skip_existing=False, update=False, report=None, das
         progress.close()
     if report:
         write_report(report, result)
-    click.echo(summary_line(result.counts, result.seconds, len(jobs)))
+    if as_json:
+        echo_document(command, result.records, result.seconds, result.events)
+    else:
+        click.echo(summary_line(result.counts, result.seconds, len(jobs)))
     if not result.ok:
         raise click.exceptions.Exit(1)
 
 
-def _print_plan(jobs) -> None:
-    failed = 0
+def _print_plan(jobs, json_command: str | None = None) -> None:
+    """Each job's planned outputs (:func:`envconv.engine.records.plan_job`) as text, or as the
+    JSON document of ``json_command``; exit 1 when a job cannot be planned."""
+    import time
+
+    from ..engine.records import plan_job
+
+    start, records = time.perf_counter(), []
     for job in jobs:
-        click.echo(job.name)
-        try:
-            outputs = job.pipeline.plan(job.input)
-        except Exception as exc:  # report and go on, like a real run
-            click.echo(f"  error: {exc}")
-            failed += 1
-            continue
-        for o in outputs:
-            levels = f"{o.levels} level{'s' if o.levels > 1 else ''}"
-            click.echo(f"  {o.layout}  N={o.size}  G={o.guard}  {o.width}x{o.height}  {levels}")
-            for path in o.files:
-                click.echo(f"    {path}")
-    if failed:
+        record = plan_job(job)
+        records.append(record)
+        if json_command is None:
+            _echo_planned(record)
+    if json_command is not None:
+        echo_document(json_command, records, time.perf_counter() - start, dry_run=True)
+    if any(record["error"] for record in records):
         raise click.exceptions.Exit(1)
+
+
+def _echo_planned(record) -> None:
+    click.echo(record["input"])
+    if record["error"]:
+        click.echo(f"  error: {record['error']}")
+    for o in record["maps"]:
+        levels = f"{o['levels']} level{'s' if o['levels'] > 1 else ''}"
+        click.echo(f"  {o['layout']}  N={o['size']}  G={o['guard']}  {o['width']}x{o['height']}  "
+                   f"{levels}")  # fmt: skip
+        for entry in o["files"]:
+            click.echo(f"    {entry['path']}")

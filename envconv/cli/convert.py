@@ -7,6 +7,8 @@ import click
 from .main import cli
 from .options import (
     color_options,
+    echo_document,
+    json_option,
     no_clobber_option,
     read_options,
     resample_options,
@@ -32,7 +34,8 @@ __all__ = ["convert_command"]
     help="Also write a tone-mapped 8-bit picture of the output (auto exposure, ACES SDR view; see docs/check-a-map.md).",
 )
 @click.option("--dry-run", is_flag=True, help="Print what would be written; write nothing.")
-def convert_command(input_path, output_path, dry_run, preview, no_clobber, **options):
+@json_option
+def convert_command(input_path, output_path, dry_run, as_json, preview, no_clobber, **options):
     """Convert INPUT to layout --to and write OUTPUT.
 
     Multi-file layouts (cube-faces, paraboloid-split) take {face} in the path. Resampling
@@ -49,12 +52,13 @@ def convert_command(input_path, output_path, dry_run, preview, no_clobber, **opt
     Example:
       envconv convert sky.exr sky_cross.exr --to cube-vcross --size 512
       envconv convert sky.exr sky.png --to latlong --exposure -1 --dry-run
+      envconv convert sky.exr 'sky_{face}.exr' --to cube-faces --size 256 --json
     """
-    from ..engine.api import convert_file, plan_convert
+    from ..engine.api import convert_record, plan_convert
 
     read_kw, resample_kw, write_kw, color_kw = split_options(options, with_color=True)
     write_kw["no_clobber"] = no_clobber
-    if dry_run:
+    if dry_run and not as_json:
         plan = plan_convert(input_path, output_path, read_kw, resample_kw, write_kw, color_kw)
         _echo_plan(plan)
         return
@@ -63,13 +67,16 @@ def convert_command(input_path, output_path, dry_run, preview, no_clobber, **opt
     warnings: list[str] = []
     try:
         with ResampleProgress():
-            paths = convert_file(input_path, output_path, read=read_kw, resample=resample_kw,
-                                 write=write_kw, color=color_kw, warnings=warnings,
-                                 preview=preview)  # fmt: skip
+            record = convert_record(input_path, output_path, read=read_kw, resample=resample_kw,
+                                    write=write_kw, color=color_kw, warnings=warnings,
+                                    preview=preview, dry_run=dry_run)  # fmt: skip
     finally:
         for message in warnings:
             click.echo(f"envconv: warning: {message}", err=True)
-    for path in paths:
+    if as_json:
+        echo_document("convert", [record], record["seconds"], dry_run=dry_run)
+        return
+    for path in record["outputs"]:
         click.echo(path)
 
 

@@ -16,6 +16,8 @@ from ..layouts import layout_names, resolve_layout_name
 from ..resample.convert import FILTERS
 
 __all__ = [
+    "json_option",
+    "echo_document",
     "refuse_overwrite",
     "no_clobber_option",
     "layout_choice",
@@ -183,3 +185,17 @@ def refuse_overwrite(input_path: str, output_path: str) -> None:
 
 #: ``-n/--no-clobber`` of convert, write, run and batch (the output policy: envconv.engine.outputs).
 no_clobber_option = click.option("-n", "--no-clobber", "no_clobber", is_flag=True, help="Refuse, before any work, to replace an output that exists (by default it is replaced atomically).")  # fmt: skip
+
+
+#: ``--json`` of convert, run and batch: one JSON document on stdout, nothing else there.
+json_option = click.option("--json", "as_json", is_flag=True, help="Print one JSON document on stdout instead of the paths or the summary: every file written (with --dry-run: that would be) with its layout, size, levels, channels, bytes and timings (docs/shell.md, 'JSON output').")  # fmt: skip
+
+
+def echo_document(command: str, records: list, seconds: float, events=None,
+                  dry_run: bool = False) -> None:  # fmt: skip
+    """Print the JSON document of :func:`envconv.engine.records.document` on stdout."""
+    import json
+
+    from ..engine.records import document
+
+    click.echo(json.dumps(document(command, records, seconds, events, dry_run), indent=2))

@@ -26,7 +26,8 @@ def run_command(graph_path, **options):
     \b
     Example:
       envconv run examples/graph.toml --dry-run
+      envconv run examples/graph.toml --json > run.json
     """
     graph = load_graph(graph_path)
     inputs = expand_inputs(graph.inputs) if graph.inputs else [None]
-    execute(make_jobs(inputs, graph.pipeline, options.pop("no_clobber")), **options)
+    execute(make_jobs(inputs, graph.pipeline, options.pop("no_clobber")), **options, command="run")

@@ -8,7 +8,7 @@ from typing import Any
 
 from .. import io
 
-__all__ = ["convert_file", "convert_pipeline", "plan_convert", "route_face_sets"]
+__all__ = ["convert_file", "convert_record", "convert_pipeline", "plan_convert", "route_face_sets"]
 
 log = logging.getLogger(__name__)
 
@@ -44,6 +44,30 @@ def convert_file(
     written: list[str] = []
     pipeline.run(keep=False, written=written, warnings=warnings)
     return written
+
+
+def convert_record(input_path, output_path, read=None, resample=None, write=None, color=None,
+                   warnings: list[str] | None = None, preview=None,
+                   dry_run: bool = False) -> dict[str, Any]:  # fmt: skip
+    """:func:`convert_file` (or with ``dry_run`` its plan, nothing written) described as one
+    record of :mod:`envconv.engine.records`: the maps written with their files' facts and
+    sizes in bytes, and the seconds spent reading, resampling and writing. Errors raise, as
+    :func:`convert_file`'s do."""
+    import time
+
+    from .records import plan_record, run_record
+
+    pipeline = convert_pipeline(input_path, output_path, read, resample, write, color, preview)
+    start = time.perf_counter()
+    if dry_run:
+        return plan_record(
+            os.fspath(input_path), pipeline.plan(), seconds=time.perf_counter() - start
+        )
+    written: list[str] = []
+    timings: dict[str, float] = {}
+    outputs = pipeline.run(keep=False, written=written, warnings=warnings, timings=timings)
+    return run_record(os.fspath(input_path), written, outputs, time.perf_counter() - start,
+                      timings)  # fmt: skip
 
 
 def convert_pipeline(input_path, output_path, read=None, resample=None, write=None, color=None,

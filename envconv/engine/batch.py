@@ -1,8 +1,9 @@
 """Batch conversion: one pipeline recipe run over many inputs, locally or on a Dask cluster.
 
 Each input is one *job*: the recipe (:class:`envconv.engine.pipeline.Pipeline`) bound to that file. A
-job never raises: it returns a record ``{"input", "status", "outputs", "seconds", "error"}``
-with status ``done``, ``skipped`` or ``failed``, so one bad file never stops the batch.
+job never raises: it returns a record ``{"input", "status", "outputs", "seconds", "error",
+"timings", "maps"}`` with status ``done``, ``skipped`` or ``failed``, so one bad file never
+stops the batch (``timings`` and ``maps``: :mod:`envconv.engine.records`).
 
 Engines
 -------
@@ -223,30 +224,35 @@ def _up_to_date(job: Job, files: list[str], mode: str) -> bool:
 
 
 def run_job(job: Job, mode: str = "all") -> dict[str, Any]:
-    """Run one job and return its record; never raises for a bad input."""
+    """Run one job and return its record (:func:`envconv.engine.records.run_record`); never
+    raises for a bad input."""
+    from .records import run_record
+
     start = time.perf_counter()
     written: list[str] = []
-    record: dict[str, Any] = {"input": job.name, "status": "done", "outputs": written,
-                              "seconds": 0.0, "error": None}  # fmt: skip
+    timings: dict[str, float] = {}
+    outputs, status, error = [], "done", None
     try:
         if mode != "all":
             files = job.pipeline.output_files(job.input)
             if _up_to_date(job, files, mode):
-                record.update(status="skipped", outputs=files)
-        if record["status"] == "done":
-            job.pipeline.run(job.input, keep=False, written=written)
+                status, written = "skipped", files
+        if status == "done":
+            outputs = job.pipeline.run(job.input, keep=False, written=written, timings=timings)
     except EnvconvError as exc:
-        record.update(status="failed", error=str(exc))
+        status, error = "failed", str(exc)
     except Exception as exc:  # a batch reports every failure and goes on
         log.debug("job %s failed", job.name, exc_info=True)
-        record.update(status="failed", error=f"internal error: {type(exc).__name__}: {exc}")
-    record["seconds"] = round(time.perf_counter() - start, 4)
-    return record
+        status, error = "failed", f"internal error: {type(exc).__name__}: {exc}"
+    return run_record(job.name, written, outputs, time.perf_counter() - start, timings, status,
+                      error)  # fmt: skip
 
 
 def _failed(job: Job, exc: BaseException | str, status: str = "failed") -> dict[str, Any]:
+    from .records import run_record
+
     error = exc if isinstance(exc, str) else f"{type(exc).__name__}: {exc}"
-    return {"input": job.name, "status": status, "outputs": [], "seconds": 0.0, "error": error}
+    return run_record(job.name, [], [], 0.0, {}, status, error)
 
 
 class BatchInterrupted(KeyboardInterrupt):

@@ -118,18 +118,21 @@ class Pipeline:
         Walk(self.variables, "check").walk(steps, require_writes)
 
     def run(self, input=None, keep: bool = True, written: list[str] | None = None,
-            warnings: list[str] | None = None) -> list[Output]:  # fmt: skip
+            warnings: list[str] | None = None,
+            timings: dict[str, float] | None = None) -> list[Output]:  # fmt: skip
         """Run the pipeline; return one :class:`Output` per resample (or plain write).
 
         The whole run is planned first (headers only) and the output policy checked
         (:mod:`envconv.engine.outputs`). ``written``, when given, collects each file as soon as it is
         written, so a caller still knows what was written if a later step fails. ``warnings``,
         when a list, collects one-line warnings (NaN/Inf in an input, clipping), else they are
-        logged at WARNING level.
+        logged at WARNING level. ``timings``, when a dict, adds up the seconds spent in
+        ``read`` (with preparing the source), ``resample`` and ``write``.
         """
         steps = self.bound(input)
         self._plan(steps)
-        walk = Walk(self.variables, "run", keep=keep, written=written, warnings=warnings)
+        walk = Walk(self.variables, "run", keep=keep, written=written, warnings=warnings,
+                    timings=timings)  # fmt: skip
         return walk.walk(steps)
 
     def plan(self, input=None) -> list[Output]:
