@@ -11,7 +11,8 @@ __all__ = ["layouts_command"]
 
 @cli.command("layouts")
 def layouts_command():
-    """List every layout with a one-line description, then the skybox face sets.
+    """List every layout with a one-line description, the world axis each cube face holds
+    (and its turn), then the skybox face sets.
 
     A face set is how a game or engine names and turns the six files of a cube-faces map
     (--in-convention / --out-convention NAME; draw one with
@@ -21,14 +22,22 @@ def layouts_command():
     Example:
       envconv layouts
     """
-    from ..layouts import ALIASES, LAYOUTS
+    from ..layouts import ALIASES, FAMILIES, LAYOUTS
     from ..layouts.facesets import FACE_SETS
+    from ..layouts.geometry import face_axes
 
     width = max(len(name) for name in LAYOUTS)
     for name, layout in LAYOUTS.items():
         aliases = [alias for alias, target in ALIASES.items() if target == name]
         also = f" (also {', '.join(aliases)})" if aliases else ""
         click.echo(f"{name:<{width}}  {layout.description}{also}")
+    click.echo("")
+    click.echo("world axis at the centre of each cube face (px..nz: the GL faces +X_c..-Z_c of")
+    click.echo("c = (-x, y, z), each an unmirrored view from inside, so px holds world -X):")
+    for name in FAMILIES["cubemap"]:
+        faces = "  ".join(f"{face} {axis}" + (" (turned 180 degrees)" if turns else "")
+                          for face, axis, turns in face_axes(name))  # fmt: skip
+        click.echo(f"{name:<{width}}  {faces}")
     click.echo("")
     click.echo("face sets of cube-faces (--in-convention / --out-convention NAME):")
     width = max(len(name) for name in FACE_SETS)

@@ -1,6 +1,6 @@
 """Public pixel ↔ direction maps of every layout, vectorised over numpy arrays.
 
-Coordinates follow CONVENTIONS.md: (u, v) in [0, 1]² of the whole image (u right, v down),
+Coordinates follow docs/geometry.md: (u, v) in [0, 1]² of the whole image (u right, v down),
 pixel centres at ((i + 0.5)/W, (j + 0.5)/H), world frame +Y up with +Z the lat-long centre.
 For multi-file layouts (u, v) refer to the in-memory mosaic (cells side by side, face order).
 """
@@ -21,6 +21,7 @@ __all__ = [
     "pixel_directions",
     "pixel_solid_angles",
     "horizon_pitch",
+    "face_axes",
 ]
 
 
@@ -50,7 +51,7 @@ def uv_to_dir(layout, u, v, size: int = 512, guard: int = 0, fill: bool = False)
     shape = u.shape
     points = np.stack([np.clip(u, 0.0, 1.0) * width, np.clip(v, 0.0, 1.0) * height], -1)
     points = np.ascontiguousarray(points.reshape(-1, 2))
-    # u = 1 or v = 1 belongs to the last pixel (half-open intervals, CONVENTIONS.md).
+    # u = 1 or v = 1 belongs to the last pixel (half-open intervals, docs/geometry.md).
     points[:, 0] = np.minimum(points[:, 0], np.nextafter(width, 0))
     points[:, 1] = np.minimum(points[:, 1], np.nextafter(height, 0))
     dirs, flags = kernels.map_points_to_dirs(kernel_geometry(layout, size, guard), points, fill)
@@ -112,3 +113,23 @@ def horizon_pitch(layout) -> float:
     phi = (np.arange(360) + 0.5) * (2 * math.pi / 360)
     dirs = np.stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)], -1)
     return float(np.mean(pixel_pitch(layout, dirs)))
+
+
+def face_axes(layout) -> list[tuple[str, str, int]]:
+    """(face name, world axis, half turns) of each face of a cube layout, in face order.
+
+    The axis (``+X`` … ``-Z``) is the direction the layout's own map gives the face's centre,
+    (a, b) = (0, 0); the half turns (0, or 2 for 180°) are those of the face's cell. For the
+    GL-table layouts ``px`` is world −X: their faces are +X_c … −Z_c of the left-handed cube
+    frame c = (−x, y, z) (docs/geometry.md), each an unmirrored view from inside.
+    """
+    layout = get_layout(layout)
+    faces = np.arange(layout.n_faces, dtype=np.int32)
+    centres = np.zeros(len(faces))
+    dirs = np.asarray(layout.face_to_dir(faces, centres, centres))
+    turns = {cell.face: cell.turns for cell in layout.cells}
+    axes = []
+    for face, name, d in zip(faces, layout.face_names, dirs, strict=True):
+        k = int(np.argmax(np.abs(d)))
+        axes.append((name, ("+" if d[k] > 0 else "-") + "XYZ"[k], turns[int(face)]))
+    return axes
