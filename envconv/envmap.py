@@ -100,7 +100,7 @@ class EnvMap:
 
     @property
     def size(self) -> int:
-        """Characteristic size N (see CONVENTIONS: height of a lat-long, face edge, diameter)."""
+        """Characteristic size N (docs/geometry.md, "Sizes": height of a lat-long, face edge, diameter)."""
         height, width = self.pixels.shape[:2]
         return self.layout.size_from_image(width, height, self.guard)
 

@@ -1,6 +1,6 @@
 """Analytic environments: radiance as a numpy function of direction.
 
-World frame of CONVENTIONS.md: +Y up, +Z the lat-long centre, +X at u = 0.25. Every function
+World frame of docs/geometry.md: +Y up, +Z the lat-long centre, +X at u = 0.25. Every function
 takes unit directions (..., 3) and returns radiance (..., 3), float64.
 
 - :func:`radiance` is smooth, asymmetric in every axis (so a mirror or a swapped axis shows),
@@ -28,7 +28,7 @@ __all__ = [
     "fibonacci_directions",
 ]
 
-#: Direction of the main highlight: the CONVENTIONS.md test direction q.
+#: Direction of the main highlight: the docs/geometry.md test direction q.
 SUN = np.array([0.48, 0.6, 0.64])
 _MOON = np.array([-0.6, -0.3, -0.74]) / np.linalg.norm([-0.6, -0.3, -0.74])
 

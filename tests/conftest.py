@@ -1,7 +1,7 @@
 """Shared fixtures and helpers for the envconv test suite.
 
 - ``tests/analytic.py``: radiance as a function of direction (the truth).
-- ``tests/naive.py``: an independent numpy reading of CONVENTIONS.md and a slow resampler.
+- ``tests/naive.py``: an independent numpy reading of docs/geometry.md and a slow resampler.
 - Here: hypothesis settings, cached analytic sources, image writers that bypass envconv (for
   untagged files), a CLI runner and small metric helpers.
 """

@@ -1,6 +1,6 @@
 """A slow, obviously correct numpy reference for envconv's geometry and resampler.
 
-Everything here is written out again from ``../shared/CONVENTIONS.md`` and deliberately calls
+Everything here is written out again from ``docs/geometry.md`` and deliberately calls
 no envconv function, so that tests comparing envconv with this module compare two independent
 readings of the contract.
 
@@ -30,7 +30,7 @@ __all__ = [
     "pixel_solid_angles",
 ]
 
-# Cell tables copied from CONVENTIONS.md: family, columns, rows, cell aspect (width in N),
+# Cell tables copied from docs/geometry.md: family, columns, rows, cell aspect (width in N),
 # and (col, row, face, rotated 180°) for every occupied cell. Cube GL face order is
 # +X_c, −X_c, +Y_c, −Y_c, +Z_c, −Z_c; cube-exr order is +X, −X, +Y, −Y, +Z, −Z.
 _STRIP_H = tuple((k, 0, k, False) for k in range(6))

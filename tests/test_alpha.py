@@ -2,7 +2,7 @@
 
 Coverage truth is computed here: the area of each pixel square inside the disks (by fine
 midpoint integration, 64 × 64 points per pixel) or inside the occupied cells (exact), with
-the cell tables of CONVENTIONS.md as written out in ``naive.GRIDS``.
+the cell tables of docs/geometry.md as written out in ``naive.GRIDS``.
 """
 
 import math

@@ -1,7 +1,7 @@
 """The chained CLI: ``envconv read … resample … write … resample … write …``.
 
 Truth: the same conversions made by ``envconv convert`` (bit for bit, pixels and metadata), and
-the known-direction table of CONVENTIONS.md for a rotated direction-coded map.
+the known-direction table of docs/geometry.md for a rotated direction-coded map.
 """
 
 from __future__ import annotations
@@ -65,7 +65,7 @@ def test_options_after_positional_and_variables(sky, tmp_path):
 
 
 def test_negative_rotation_turns_the_environment(tmp_path):
-    # A direction-coded lat-long: each pixel holds its own direction (CONVENTIONS.md formula).
+    # A direction-coded lat-long: each pixel holds its own direction (docs/geometry.md formula).
     n = 32
     u = (np.arange(2 * n) + 0.5) / (2 * n)
     v = (np.arange(n) + 0.5) / n

@@ -44,7 +44,7 @@ def test_info_json_reports_the_map(tmp_path, name, n):
     np.testing.assert_allclose(record["max"], pixels.max((0, 1)), rtol=1e-6)
     mean = np.asarray(record["mean_radiance"])
     if name == "tennisball":
-        # The bands overlap (CONVENTIONS.md), so every pixel counts once and the overlap twice;
+        # The bands overlap (docs/geometry.md), so every pixel counts once and the overlap twice;
         # that mean is the analytic mean over the two bands, computed here by supersampling.
         omega = naive.pixel_solid_angles(name, n, 8)
         expected = (pixels * omega[..., None]).sum((0, 1)) / omega.sum()

@@ -251,7 +251,7 @@ def test_dithering_is_deterministic_and_on_by_default(tmp_path):
 
 
 def analytic(u, v):
-    """A smooth function of direction, via CONVENTIONS' lat-long formula."""
+    """A smooth function of direction, via docs/geometry.md's lat-long formula."""
     lon, lat = 2 * np.pi * (0.5 - u), np.pi * (0.5 - v)
     x, y, z = np.sin(lon) * np.cos(lat), np.sin(lat), np.cos(lon) * np.cos(lat)
     return np.stack([1 + 0.5 * x, 1 + 0.5 * y, 1 + 0.5 * z], axis=-1)

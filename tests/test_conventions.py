@@ -37,7 +37,7 @@ BLENDER = lambda d: np.stack([d[..., 0], d[..., 2], -d[..., 1]], -1)  # noqa: E7
 UNREAL = lambda d: np.stack([-d[..., 1], d[..., 2], d[..., 0]], -1)  # noqa: E731
 FFMPEG = lambda d: d * [1.0, -1.0, -1.0]  # noqa: E731
 # pbrt-v4 reads a lat-long at (atan2(y, x)/2π, acos(z)/π) (imgtool makeequiarea); by
-# CONVENTIONS.md's lat-long formulas that point is (e_y, e_z, −e_x) (tests/test_octahedral.py).
+# docs/geometry.md's lat-long formulas that point is (e_y, e_z, −e_x) (tests/test_octahedral.py).
 PBRT = lambda e: np.stack([e[..., 1], e[..., 2], -e[..., 0]], -1)  # noqa: E731
 
 
@@ -442,7 +442,7 @@ def test_out_axes_inverts_up_z():
     assert np.abs(back - env(dirs))[valid].max() < 1e-5
 
 
-# CONVENTIONS.md, "Where known directions land": envconv's lat-long (u, v) of ±X, ±Z and q.
+# docs/geometry.md, "Where known directions land": envconv's lat-long (u, v) of ±X, ±Z and q.
 LATLONG_TABLE = {(1, 0, 0): (0.25, 0.5), (-1, 0, 0): (0.75, 0.5), (0, 0, 1): (0.5, 0.5),
                  (0, 0, -1): (0.0, 0.5), (0.48, 0.6, 0.64): (0.3976, 0.2952)}  # fmt: skip
 

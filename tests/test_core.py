@@ -1,6 +1,6 @@
 """The native core through its bindings (envconv.resample.kernels, envconv._core).
 
-Truth: the independent numpy reading of CONVENTIONS.md in tests/naive.py for every family's
+Truth: the independent numpy reading of docs/geometry.md in tests/naive.py for every family's
 maps and densities, and the core itself run on one thread for the thread-count invariance.
 """
 

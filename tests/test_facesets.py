@@ -3,7 +3,7 @@
 The truth here is not envconv's: for every face set a small function below follows the cited
 program's own formula for where a file's pixel shows up in its world (Quake's ``st_to_vec`` and
 ``MakeSkyVec``, Sauerbraten's ``draw_envbox`` quads, the OpenGL cube-map table as each engine
-samples it, Unreal's importer swizzle), then the program's world is taken to CONVENTIONS.md's by
+samples it, Unreal's importer swizzle), then the program's world is taken to docs/geometry.md's by
 the standard frame map. Six files rendered that way from an analytic sky must read as the
 analytic sky, and envconv must write exactly those files. A seam check needs no formula of
 envconv's at all: assembled by the program's formula, neighbouring pixels across each of the
@@ -99,7 +99,7 @@ def gl_faces(names, to_world):
 
 
 FORMULAS = {
-    # CONVENTIONS.md: envconv's own table is the GL table read in the left-handed c = (-x, y, z).
+    # docs/geometry.md: envconv's own table is the GL table read in the left-handed c = (-x, y, z).
     "envconv": lambda: gl_faces(
         ("px", "nx", "py", "ny", "pz", "nz"), lambda c: (-c[0], c[1], c[2])
     ),

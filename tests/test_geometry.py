@@ -1,4 +1,4 @@
-"""envconv.layouts.geometry against an independent reading of CONVENTIONS.md and numeric Jacobians."""
+"""envconv.layouts.geometry against an independent reading of docs/geometry.md and numeric Jacobians."""
 
 from __future__ import annotations
 
@@ -21,7 +21,7 @@ RECT = [
     name for name in NAMES if name not in ("sphere", "angular", "paraboloid", "paraboloid-split")
 ]
 DISKS = ["sphere", "angular", "paraboloid", "paraboloid-split"]
-# Tennisball's bands overlap (CONVENTIONS: about 6% of the sphere) and every pixel of both is
+# Tennisball's bands overlap (docs/geometry.md: about 6% of the sphere) and every pixel of both is
 # valid, so its pixels cover two bands of (3π/2) · 2 sin(π/4) sr each rather than 4π.
 TENNISBALL_AREA = 2 * (1.5 * math.pi) * (2 * math.sin(math.pi / 4))
 

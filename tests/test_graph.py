@@ -1,7 +1,7 @@
 """Graph files (envconv.engine.graph) and ``envconv run``: variables, validation, --dry-run.
 
 Truth: outputs equal ``envconv.convert`` of the same input; plans are checked against the
-layouts' size rules of CONVENTIONS.md (W × H from N and G) and against the files a real run writes.
+layouts' size rules of docs/geometry.md (W × H from N and G) and against the files a real run writes.
 """
 
 from __future__ import annotations

@@ -1,6 +1,6 @@
 """Guard rings and --guard fill against the analytic environment in the continued direction.
 
-The continued direction of every pixel is computed here from CONVENTIONS.md ("Guard ring"),
+The continued direction of every pixel is computed here from docs/geometry.md ("Guard ring"),
 with numpy and the cell tables of ``naive.GRIDS``; nothing in envconv's geometry is called.
 Conversions use one sub-sample per pixel (the pixel centre), so each output pixel must equal
 the source environment in its pixel centre's continued direction.

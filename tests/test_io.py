@@ -242,7 +242,7 @@ def test_cube_faces_write_six_named_files(tmp_path):
     written = envconv.write(faces, template)
     names = ["px", "nx", "py", "ny", "pz", "nz"]
     assert written == [template.replace("{face}", f) for f in names]
-    # GL faces: px holds world −X, nx +X, py +Y, ny −Y, pz +Z, nz −Z (CONVENTIONS.md).
+    # GL faces: px holds world −X, nx +X, py +Y, ny −Y, pz +Z, nz −Z (docs/geometry.md).
     centres = {"px": (-1, 0, 0), "nx": (1, 0, 0), "py": (0, 1, 0), "ny": (0, -1, 0),
                "pz": (0, 0, 1), "nz": (0, 0, -1)}  # fmt: skip
     for face, direction in centres.items():

@@ -1,4 +1,5 @@
-"""Every registered layout against CONVENTIONS.md: known directions, round trips, size rule."""
+"""Every registered layout against docs/geometry.md: known directions (its table, read from the
+page), round trips, size rule."""
 
 from __future__ import annotations
 
@@ -7,6 +8,7 @@ import math
 import naive
 import numpy as np
 import pytest
+from geometry_doc import AXES, BOTTOM, RIM, TOP, known_directions
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
@@ -20,51 +22,13 @@ ISSUE_LAYOUTS = [
     "octahedral", "equal-area",
 ]  # fmt: skip
 
-AXES = {
-    "+X": (1.0, 0.0, 0.0),
-    "-X": (-1.0, 0.0, 0.0),
-    "+Y": (0.0, 1.0, 0.0),
-    "-Y": (0.0, -1.0, 0.0),
-    "+Z": (0.0, 0.0, 1.0),
-    "-Z": (0.0, 0.0, -1.0),
-    "q": (0.48, 0.6, 0.64),
-}
-TOP, BOTTOM, RIM = "top row", "bottom row", "rim"
-CORNERS = [(0, 0), (1, 0), (0, 1), (1, 1)]  # the octahedral squares' -Y: any of the four
-
-# The table "Where known directions land (u, v)" of CONVENTIONS.md, copied verbatim.
-TABLE = {
-    "latlong": [(0.25, 0.5), (0.75, 0.5), TOP, BOTTOM, (0.5, 0.5), [(0, 0.5), (1, 0.5)],
-                (0.3976, 0.2952)],
-    "cube-vcross": [(0.1667, 0.375), (0.8333, 0.375), (0.5, 0.125), (0.5, 0.625), (0.5, 0.375),
-                    (0.5, 0.875), (0.375, 0.2578)],
-    "cube-hcross": [(0.125, 0.5), (0.625, 0.5), (0.375, 0.1667), (0.375, 0.8333), (0.375, 0.5),
-                    (0.875, 0.5), (0.2812, 0.3438)],
-    "cube-hstrip": [(0.25, 0.5), (0.08333, 0.5), (0.4167, 0.5), (0.5833, 0.5), (0.75, 0.5),
-                    (0.9167, 0.5), (0.6875, 0.03125)],
-    "cube-exr": [(0.5, 0.08333), (0.5, 0.25), (0.5, 0.4167), (0.5, 0.5833), (0.5, 0.75),
-                 (0.5, 0.9167), (0.125, 0.6719)],
-    "sphere": [(0.8536, 0.5), (0.1464, 0.5), (0.5, 0.1464), (0.5, 0.8536), (0.5, 0.5), RIM,
-               (0.6325, 0.3344)],
-    "angular": [(0.75, 0.5), (0.25, 0.5), (0.5, 0.25), (0.5, 0.75), (0.5, 0.5), RIM,
-                (0.5871, 0.3911)],
-    "paraboloid": [(0.5, 0.5), (0, 0.5), (0.25, 0), (0.25, 1), (0.25, 0.5), (0.75, 0.5),
-                   (0.3232, 0.3171)],
-    "tennisball": [(0.1667, 0.25), (0.8333, 0.25), (0.1667, 0.75), (0.8333, 0.75), (0.5, 0.25),
-                   (0.5, 0.75), (0.3634, 0.04517)],
-    "octahedral": [(1, 0.5), (0, 0.5), (0.5, 0.5), CORNERS, (0.5, 0), (0.5, 1), (0.6395, 0.314)],
-    "equal-area": [(1, 0.5), (0, 0.5), (0.5, 0.5), CORNERS, (0.5, 0), (0.5, 1), (0.6295, 0.3133)],
-}  # fmt: skip
+# The table "Where known directions land (u, v)", read from docs/geometry.md itself.
+TABLE = known_directions()
 
 
-# Layouts the table does not list, derived from it: the six-file and two-file layouts are
-# described by their in-memory mosaic (cells side by side in face order, as cube-hstrip and
-# the packed paraboloid), and cube-vstrip is cube-hstrip with its cells stacked (face k in
-# row k: u = 6 u_h − k, v = (k + v_h) / 6).
-TABLE["cube-faces"] = TABLE["cube-hstrip"]
-TABLE["paraboloid-split"] = TABLE["paraboloid"]
-TABLE["cube-vstrip"] = [(0.5, 0.25), (0.5, 0.08333), (0.5, 0.4167), (0.5, 0.5833), (0.5, 0.75),
-                        (0.5, 0.9167), (0.125, 0.6719)]  # fmt: skip
+def test_the_table_has_a_row_for_every_layout():
+    assert sorted(TABLE) == sorted(LAYOUTS)
+
 
 # W × H of the image in units of N (the mosaic for multi-file layouts), and the file size.
 SIZE_RULE = {
@@ -82,7 +46,7 @@ NUDGES = [(du, dv) for du in (0, -1, 1) for dv in (0, -1, 1)]
 def _closest_dir(name, u, v, target, delta=1e-9):
     """Smallest |uv_to_dir(u, v) − target| over (u, v) and its neighbours ±delta.
 
-    A point exactly on a cell border belongs to the cell right of or below it (CONVENTIONS),
+    A point exactly on a cell border belongs to the cell right of or below it (docs/geometry.md),
     which may hold an unrelated face (e.g. cube-hstrip); the direction that dir_to_uv meant is
     then found an infinitesimal step into the neighbouring cell.
     """

@@ -48,7 +48,7 @@ OWN = {
 def _pbrt_to_envconv(e):
     """pbrt's light-frame direction e → the envconv direction of the same lat-long pixel:
     pbrt reads a lat-long at (SphericalPhi/2π, SphericalTheta/π) (imgtool makeequiarea), and
-    CONVENTIONS.md says which direction that lat-long point is."""
+    docs/geometry.md says which direction that lat-long point is."""
     u = ports.spherical_phi(e) / (2 * math.pi)
     v = ports.spherical_theta(e) / math.pi
     return naive.face_to_dir("latlong", 0, 2 * u - 1, 2 * v - 1)
@@ -308,3 +308,27 @@ def test_ddgi_preset_is_rtxgi_octahedral_direction():
     u, v = dir_to_uv("octahedral", (t @ m), size=n)
     np.testing.assert_allclose(np.stack([u, v], -1), np.stack([(cx + 1) / 2, (cy + 1) / 2], -1),
                                atol=1e-12)  # fmt: skip
+
+
+def test_both_squares_read_a_zero_component_as_positive():
+    """The tie rule of the cube faces (a zero counts as positive) holds in both squares, for
+    either sign of zero: -Y lands on the bottom-right corner (u, v) = (1, 1) in both, and a
+    lower-hemisphere direction with t_x or t_y = ±0 on the same half of the edge in both
+    (the halves (1, b) and (1, -b) hold the same direction; pbrt's copysign of -0 picked the
+    other half in the equal-area square alone)."""
+    from envconv.layouts.geometry import dir_to_uv
+
+    zero = (0.0, -0.0)
+    minus_y = np.array([(x, -1.0, z) for x in zero for z in zero])
+    edges = np.array([(0.6, -0.8, z) for z in zero] + [(-0.6, -0.8, z) for z in zero]
+                     + [(x, -0.8, 0.6) for x in zero] + [(x, -0.8, -0.6) for x in zero])  # fmt: skip
+    signs = []
+    for name in ("octahedral", "equal-area"):
+        u, v = dir_to_uv(name, minus_y, size=8)
+        np.testing.assert_array_equal(np.stack([u, v], -1), np.ones((4, 2)))
+        u, v = dir_to_uv(name, edges, size=8)
+        a, b = 2 * u - 1, 2 * v - 1
+        # t = (d_x, -d_z, d_y): the zero component of t is read as positive.
+        assert (a[[4, 5, 6, 7]] >= 0).all() and (b[[0, 1, 2, 3]] > 0).all(), (name, a, b)
+        signs.append(np.sign(np.stack([a, b], -1)))
+    np.testing.assert_array_equal(signs[0], signs[1])

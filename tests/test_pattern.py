@@ -21,7 +21,7 @@ READS = {
 }
 
 # World direction of point (a, b) (a right, b down) of the cube face that looks at each axis:
-# the GL table of CONVENTIONS.md, whose faces are unmirrored views from inside, with
+# the GL table of docs/geometry.md, whose faces are unmirrored views from inside, with
 # d = (-c_x, c_y, c_z).
 FACE_VIEW = {
     "+X": lambda a, b: (1.0, -b, a),  # -X_c

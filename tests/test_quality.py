@@ -61,7 +61,7 @@ def test_high_frequency_pattern_does_not_alias(pattern_source):
 def _checker(dirs, width=4096, check=4):
     """The lat-long-aligned checker of a width × width/2 image with ``check``-pixel squares,
     as a function of direction (1 on even squares, 0 on odd), from the lat-long formulas of
-    CONVENTIONS.md: u = 0.5 − atan2(x, z) / 2π, v = 0.5 − asin(y) / π."""
+    docs/geometry.md: u = 0.5 − atan2(x, z) / 2π, v = 0.5 − asin(y) / π."""
     d = np.asarray(dirs, np.float64)
     u = 0.5 - np.arctan2(d[..., 0], d[..., 2]) / (2 * math.pi)
     v = 0.5 - np.arcsin(np.clip(d[..., 1], -1.0, 1.0)) / math.pi

@@ -180,7 +180,7 @@ SEAM_SAMPLES = 4
 def test_seams_latlong_to_layout(name, smooth_truth):
     """Output pixels within 2 px of a cell edge are no worse than 1.5× the interior.
 
-    Truth is the environment as CONVENTIONS.md defines it (the bilinear reconstruction of the
+    Truth is the environment as docs/geometry.md defines it (the bilinear reconstruction of the
     source), averaged over each pixel with 8×8 sub-samples by tests/naive.py, so the source's
     own interpolation error (largest at the lat-long poles, which lie on the paraboloid rim)
     does not count. Pixels only partly inside a disk are left out: their value is a point

@@ -1,7 +1,7 @@
 """The lat-long rip-map that auto sampling reads in polar rows (envconv.resample.kernels.build_rips).
 
 Truth: numpy box averages of level 0, the seam-aware bilinear read of the core's taps
-(the continued mapping that the known-direction tests pin to CONVENTIONS.md), and
+(the continued mapping that the known-direction tests pin to docs/geometry.md), and
 analytic environments averaged over each output pixel (tests/naive.py).
 """
 

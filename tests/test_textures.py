@@ -39,7 +39,7 @@ def chain():
     return envconv.convert(_direction_latlong(), "cube-faces", size=N, mips=True, samples=4)
 
 
-#: Cell (column, row, half turns) of faces +X_c … −Z_c, as CONVENTIONS.md places them.
+#: Cell (column, row, half turns) of faces +X_c … −Z_c, as docs/geometry.md places them.
 CELLS = {
     "cube-faces": [(f, 0, 0) for f in range(6)],
     "cube-vstrip": [(0, f, 0) for f in range(6)],
@@ -49,7 +49,7 @@ CELLS = {
 
 
 def _faces(levels, layout="cube-faces"):
-    """faces[f][k]: face f of level k, cut from the layout's image by CONVENTIONS' cell table,
+    """faces[f][k]: face f of level k, cut from the layout's image by docs/geometry.md's cell table,
     RGBA float32 (alpha 1 added)."""
     out = []
     for col, row, turns in CELLS[layout]:
@@ -71,7 +71,7 @@ def _d3d_direction(face, size):
     +Y: (rx, rz, ry); −Y: (rx, −rz, −ry); +Z: (rx, −ry, rz); −Z: (−rx, −ry, −rz), with
     s = (sc/|ma| + 1)/2, t = (tc/|ma| + 1)/2. Inverted for (s, t) at texel centres. The cube
     frame is left-handed (+X right, +Y up, +Z forward); the world frame is the same with x
-    negated (KTX2 spec, "Cubemap Orientation"; envconv's CONVENTIONS.md).
+    negated (KTX2 spec, "Cubemap Orientation"; envconv's docs/geometry.md).
     """
     s = 2 * (np.arange(size) + 0.5) / size - 1
     sc, tc = np.meshgrid(s, s)  # tc runs down the rows

@@ -5,7 +5,7 @@ and a *convention* says how that tool's pixels relate to envconv's geometry for 
 
     w = M · d(p)                         (then, for some presets, a cell remap)
 
-where d(p) is the unit direction envconv's own layout formula gives pixel p (CONVENTIONS.md),
+where d(p) is the unit direction envconv's own layout formula gives pixel p (docs/geometry.md),
 w is the world direction (envconv's frame: right-handed, +Y up, +Z the lat-long centre) that
 the tool stores at p, and M is an orthogonal 3×3 matrix, for the presets a signed permutation.
 M may be improper (det −1): the tool's image is then a mirror image of envconv's.
@@ -19,7 +19,7 @@ Each tool's own frame is first taken to envconv's by the standard map for its ki
     ffmpeg v360 (x right, y down, z front)        (x, y, z)  ->  (x, −y, −z)
 
 so an image that looks unmirrored from inside in the tool also does in envconv. This is the
-reading CONVENTIONS.md already uses for cube faces: the GL/D3D table is stated in the
+reading docs/geometry.md already uses for cube faces: the GL/D3D table is stated in the
 left-handed frame c = (−x, y, z), which makes envconv's cube layouts *exactly* the cube files of
 cmft, Unity, CubeMapGen and HDRShop. The relations, from conventions-in-the-wild.md:
 

@@ -3,7 +3,7 @@
 A *face set* is the ``cube-faces`` layout (six N × N files through ``{face}`` in the path) with
 another program's file names and each face's own turn or flip. Every face of every set below is
 exactly one of envconv's cube faces (the GL/D3D/KTX table of :mod:`envconv.layouts.cube`, world
-frame of CONVENTIONS.md) seen through a signed permutation of its local coordinates:
+frame of docs/geometry.md) seen through a signed permutation of its local coordinates:
 
     file face pixel at (a, b)  =  envconv face ``slot`` at (a', b') = T · (a, b)
 

@@ -1,6 +1,6 @@
 """Sample grids of a lat-long: where a W × H image's samples sit, and moving between grids.
 
-envconv's lat-long (CONVENTIONS.md) is sampled at pixel centres. Some readers and writers put
+envconv's lat-long (docs/geometry.md) is sampled at pixel centres. Some readers and writers put
 the samples on the image's edges instead, so that the first and last rows lie on the poles
 (and, for OpenEXR, the first and last columns both on the seam). The *grid* names where
 sample (i, j) of a W × H lat-long sits in (u, v); the direction of (u, v) is envconv's formula
@@ -29,7 +29,7 @@ Moving between grids is a separable linear interpolation, rows then columns: exa
 constants and for functions linear in u and v, otherwise within h²/8 times the second
 derivative (h the sample spacing). :func:`to_centres` interpolates between the file's samples;
 :func:`from_centres` interpolates envconv's pixels at the other grid's positions, continuing the
-map past its ends as CONVENTIONS.md does (columns wrap; a row past a pole is the first or last
+map past its ends as docs/geometry.md does (columns wrap; a row past a pole is the first or last
 row turned half a turn, i.e. on the opposite meridian), so a sample on a pole is the mean of
 the two pixels facing each other across it.
 """

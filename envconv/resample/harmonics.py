@@ -89,7 +89,7 @@ def sh_basis(dirs, frame: str = "world") -> np.ndarray:
 def project(envmap: EnvMap, frame: str = "world") -> np.ndarray:
     """The nine SH coefficients L_lm of every channel of ``envmap``: (9, C) float64.
 
-    Each pixel's value is its solid-angle mean (CONVENTIONS.md), so the projection sums
+    Each pixel's value is its solid-angle mean (docs/geometry.md), so the projection sums
     value × ∫_pixel Y_lm dω over the pixels of the valid region; the integrals take 2 × 2
     sub-samples per pixel (1 from N = 512 on), each weighted by its solid angle, and 16 × 16
     in pixels that the edge of the valid region cuts. Guard rings are skipped, and a direction

@@ -11,7 +11,7 @@ transform serves every level.
 Method
 ------
 Each texel is the solid-angle mean of the environment over the readable part of its footprint,
-and its alpha is the fraction of the footprint in the valid region (CONVENTIONS.md, "Mip
+and its alpha is the fraction of the footprint in the valid region (docs/geometry.md, "Mip
 chains"). Level 0 comes from the resampler with S×S sub-samples per pixel. A level whose texel
 grid nests in an already computed level j (``W_j % W_k == 0`` and ``H_j % H_k == 0``, always the
 case when N + 2G is a power of two) is reduced from level j **exactly**: each texel is the

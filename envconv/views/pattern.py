@@ -14,7 +14,7 @@ convention:
   dark plate, drawn in the tangent plane of the axis (gnomonic projection), upright and
   unmirrored for a camera at the centre looking along the axis. "Up" is +Y for the four
   horizon labels, −Z for "+Y" and +Z for "-Y", so every label is upright in the cube faces and
-  crosses of CONVENTIONS.md, and the horizon labels are upright in the lat-long.
+  crosses of docs/geometry.md, and the horizon labels are upright in the lat-long.
 
 Values lie in [0, 1]. Screen right for a camera looking along f with up vector u is f × u.
 """

@@ -3,7 +3,7 @@
 The page (template ``viewer_page.html`` beside this module) is WebGL2 and needs no network:
 the map, its irradiance and the display transforms are embedded in it as JSON.
 
-- **Map**: the input resampled to envconv's lat-long (envconv's frame, CONVENTIONS.md), at
+- **Map**: the input resampled to envconv's lat-long (envconv's frame, docs/geometry.md), at
   most ``CAP_HEIGHT`` × 2·``CAP_HEIGHT`` (2048 × 1024), as Radiance RGBE bytes in base64
   (negative and non-finite values become 0); :func:`envconv.views.preview.working_map` makes it, so a
   lat-long over four times the cap is box-averaged by an integer factor first. **Irradiance**: a 32 × 64 lat-long of E/π

@@ -1,7 +1,7 @@
 // Layout maps of every geometry family: (face, a, b) <-> unit direction, and the solid-angle
 // density of (a, b).
 //
-// Frame (CONVENTIONS.md): world +Y up, +Z the lat-long centre, +X at u = 0.25 of a lat-long.
+// Frame (docs/geometry.md): world +Y up, +Z the lat-long centre, +X at u = 0.25 of a lat-long.
 // A face is a chart with local coordinates (a, b) in [-1, 1]^2, a to the right and b downward;
 // the Python layout modules (envconv/layouts/) place faces in cells and carry the diagrams.
 // Every face_to_dir is continued past its valid region (guard rings and filter taps read it),
@@ -365,7 +365,10 @@ inline Vec3 face_to_dir(int, double a, double b) {
 }
 // Inverse: r = sqrt(1 - |t_z|), computed as |(t_x, t_y)| / sqrt(1 + |t_z|) to keep its digits
 // near the poles (pbrt's polynomial atan is replaced by atan2); b' = r 2phi/pi, a' = r - b',
-// folded to (1 - b', 1 - a') where t_z < 0, then signed by t_x and t_y.
+// folded to (1 - b', 1 - a') where t_z < 0, then signed by t_x and t_y with a zero counting
+// as positive, as in the octahedral square and the cube faces' tie rule (pbrt's copysign
+// reads the sign bit of -0, so -Y, t = (0, -0, -1), would land on another corner than the
+// octahedral square's; both corners are -Y, and the two squares now agree on the point).
 inline FacePoint dir_to_face(double x, double y, double z) {
     double tx = x, ty = -z, tz = y;
     double ax = std::fabs(tx), ay = std::fabs(ty);
@@ -377,7 +380,7 @@ inline FacePoint dir_to_face(double x, double y, double z) {
         bb = 1.0 - aa;
         aa = fa;
     }
-    return {0, std::copysign(aa, tx), std::copysign(bb, ty)};
+    return {0, aa * octa::sign_not_zero(tx), bb * octa::sign_not_zero(ty)};
 }
 inline double density(int, double, double) { return kPi; }
 }  // namespace equal_area
