@@ -169,3 +169,21 @@ def test_convert_never_writes_onto_its_input(tmp_path, sky):
         lines = stderr_lines(result)
         assert len(lines) == 1 and "never writes onto its input" in lines[0], lines
         assert file_state(sky) == before
+
+
+@pytest.mark.parametrize("command", [["convert"], ["resample"]])
+def test_help_states_the_default_size_rule_with_numbers_the_code_gives(command):
+    """--help of convert and of the chain's resample states the default --size rule, and its
+    worked numbers are what envconv.resample.options.default_size computes."""
+    import re
+
+    from envconv.resample.options import default_size
+
+    text = " ".join(run_cli([*command, "--help"]).stdout.split())
+    assert "pitch along the horizon" in text and "power of two" in text
+    cube, latlong, chain = (int(n) for n in re.search(
+        r"gives cube faces of (\d+), a lat-long of (\d+)\).*?\(\d+ becomes (\d+)\)", text).groups())  # fmt: skip
+    source = envconv.EnvMap(np.zeros((1024, 2048, 3), np.float32), "latlong")
+    assert default_size(source, "cube-vcross") == cube
+    assert default_size(source, "latlong") == latlong
+    assert default_size(source, "cube-vcross", mips=True) == chain

@@ -110,7 +110,7 @@ READ = [
 
 RESAMPLE = [
     ("to", click.option("--to", "to", required=True, type=layout_choice(), help="Output layout.")),
-    ("size", click.option("--size", type=click.IntRange(min=1), help="Output N (face edge, height, diameter); default keeps the input's horizon resolution.")),
+    ("size", click.option("--size", type=click.IntRange(min=1), help="Output N: face edge, lat-long height, disk diameter (docs/geometry.md, 'Sizes'). Default: the N that keeps the input's pixel pitch along the horizon (a 2048x1024 lat-long gives cube faces of 559, a lat-long of 1024); with --mips, N+2G is then rounded to the nearest power of two (--mips K: multiple of 2^(K-1)), so that every level holds whole cells (559 becomes 512).")),
     ("samples", click.option("--samples", default="auto", callback=parse_samples, show_default=True, help="Sub-samples per pixel edge S (S×S per pixel), or 'auto': per pixel, about two per source texel its edge spans.")),
     ("filter", click.option("--filter", "filter", type=click.Choice(list(FILTERS)), default="bilinear", show_default=True, help="Reconstruction filter for source reads.")),
     ("rotate", click.option("--rotate", metavar="YAW,PITCH,ROLL", help="Rotate the environment, degrees: about +Y, then +X, then +Z (right-hand rule).")),

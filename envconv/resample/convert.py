@@ -97,7 +97,9 @@ def convert(
     to : str or Layout
         Output layout name, e.g. ``"cube-vcross"``.
     size : int, optional
-        Output characteristic size N; default keeps the horizon resolution.
+        Output characteristic size N (docs/geometry.md, "Sizes"). Default: the N that keeps
+        the source's pixel pitch along the horizon, rounded with ``mips`` so that every level
+        holds whole cells (:func:`envconv.resample.options.default_size`).
     samples : int or "auto"
         Sub-samples per pixel edge S (S×S per pixel).
     filter : {"bilinear", "bicubic", "nearest"}
