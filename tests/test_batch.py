@@ -52,6 +52,9 @@ def _strip_times(report):
     report["summary"].pop("seconds")
     for record in report["files"]:
         record.pop("seconds")
+        record.pop("timings")  # wall-clock seconds too
+        for entry in record["maps"]:
+            entry.pop("seconds")
     return report
 
 

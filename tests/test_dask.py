@@ -51,6 +51,9 @@ def _normalise(report_path, out):
     report["summary"].pop("seconds")
     for record in report["files"]:
         record.pop("seconds")
+        record.pop("timings")  # wall-clock seconds too
+        for entry in record["maps"]:
+            entry.pop("seconds")
     return json.loads(json.dumps(report).replace(str(out), "OUT"))
 
 

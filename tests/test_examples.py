@@ -123,3 +123,56 @@ def _sphere_mean(envmap):
 
     omega = pixel_solid_angles(envmap.layout, envmap.size, envmap.guard)
     return (envmap.pixels[..., :3] * omega[..., None]).sum(axis=(0, 1)) / omega.sum()
+
+
+def _doc_batch_script() -> str:
+    """The Python block of docs/python.md that starts a batch."""
+    import re
+
+    text = (EXAMPLES.parent / "docs" / "python.md").read_text("utf-8")
+    blocks = re.findall(r"```python\n(.*?)```", text, flags=re.S)
+    (block,) = [b for b in blocks if "run_batch(" in b]
+    return block
+
+
+def test_the_batch_snippet_of_the_docs_is_the_example_and_runs_as_a_saved_script(workdir):
+    """docs/python.md shows examples/batch_api.py as it is (after its docstring), and the
+    script runs on two worker processes: every input converted, as a direct convert does."""
+    script = (workdir / "batch_api.py").read_text("utf-8")
+    assert _doc_batch_script().strip() in script
+    done = _run([sys.executable, "batch_api.py", "out-batch-api"], workdir)
+    assert done.returncode == 0, done.stderr
+    assert "{'done': 4, 'skipped': 0, 'failed': 0}" in done.stdout
+    report = json.loads((workdir / "out-batch-api" / "report.json").read_text())
+    for record in report["files"]:
+        (path,) = record["outputs"]
+        direct = envconv.convert(io.read(record["input"]), "cube-vcross", size=64)
+        written = io.read(path).pixels
+        assert np.array_equal(written, direct.pixels.astype(np.float16).astype(np.float32))
+
+
+@pytest.mark.parametrize("breakage, message", [
+    ("unguarded", 'under `if __name__ == "__main__":`'),
+    ("import", "ImportError: this environment cannot import what the worker needs"),
+])  # fmt: skip
+def test_a_worker_that_dies_on_import_stops_the_batch_with_one_line(workdir, breakage, message):
+    """The example without its guard (every worker would start the batch again) and with an
+    import that fails in the workers only: the batch stops at once with WorkerStartError, one
+    line saying why; the workers' tracebacks do not reach the terminal and nothing hangs."""
+    script = (workdir / "batch_api.py").read_text("utf-8")
+    if breakage == "unguarded":
+        script = script.replace('if __name__ == "__main__":\n    main(', "if True:\n    main(")
+    else:
+        script = script.replace(
+            "import sys\n", 'import sys\n\nif __name__ == "__mp_main__":\n    raise ImportError('
+            '"this environment cannot import what the worker needs")\n', 1)  # fmt: skip
+    (workdir / f"broken_{breakage}.py").write_text(script, "utf-8")
+    done = _run([sys.executable, f"broken_{breakage}.py", f"out-{breakage}"], workdir)
+    assert done.returncode == 1
+    # The script's own traceback ends with the one line; the workers printed nothing here.
+    assert done.stderr.count("Traceback") == 1, done.stderr
+    last = done.stderr.strip().splitlines()[-1]
+    assert last.startswith("envconv.engine.workers.WorkerStartError: batch workers cannot start")
+    assert message in last, last
+    assert "bootstrapping phase" not in done.stderr
+    assert not (workdir / f"out-{breakage}").exists()

@@ -972,3 +972,26 @@ def test_a_chain_a_batch_and_a_graph_file_refuse_a_contradiction_before_any_job(
         run = envconv("run", graph)
     assert_failed_cleanly(run, 2, tmp_path, message="png holds one image")
     assert not (tmp_path / "o.png").exists()
+
+
+def test_batch_workers_that_cannot_start_stop_the_batch_in_one_line(tmp_path):
+    """A broken environment that only the spawned workers meet (a sitecustomize that exits in
+    a process started with --multiprocessing-fork): every worker would die on start, so the
+    batch stops at once with one line quoting the worker's error, exit 1, nothing written."""
+    site = tmp_path / "site"
+    site.mkdir()
+    (site / "sitecustomize.py").write_text(
+        "import sys\nif '--multiprocessing-fork' in sys.argv:\n"
+        "    raise SystemExit('simulated: this environment cannot run a worker')\n")  # fmt: skip
+    folder = tmp_path / "in"
+    folder.mkdir()
+    maps = [_map(folder / "a.exr"), _map(folder / "b.exr")]
+    before = snapshot(*maps)
+    path = os.pathsep.join(p for p in (str(site), os.environ.get("PYTHONPATH", "")) if p)
+    run = envconv("batch", folder, "--out", tmp_path / "out" / "{stem}.exr", "-j", "2",
+                  "resample", "--to", "latlong", "--size", "4", env={"PYTHONPATH": path},
+                  timeout=60)  # fmt: skip
+    assert_failed_cleanly(run, 1, tmp_path, message="batch workers cannot start")
+    assert "simulated: this environment cannot run a worker" in run.stderr
+    assert not (tmp_path / "out").exists()
+    assert_untouched(before)

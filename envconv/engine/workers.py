@@ -8,6 +8,12 @@ contained.
   running: that job is run again once on a fresh worker; if that worker dies too the job
   fails with the cause ("worker died (killed by SIGKILL)"). The other jobs go on. Every death
   is listed in the returned events (and so in the batch report).
+* A worker that dies before it is ready (its imports or its set-up failed: a script that
+  starts a batch without ``if __name__ == "__main__":``, which every spawned worker runs again,
+  or a broken environment) would die again on every start: the batch stops at once with
+  :class:`WorkerStartError`, one line saying why. What a worker writes on stderr goes through
+  this process (:class:`_Stderr`): kept until the worker is ready, so that its last line gives
+  the cause instead of a traceback per worker on the terminal, and passed on after.
 * SIGINT/SIGTERM in this process (:mod:`envconv.engine.interrupt`) stops handing out jobs, sends
   SIGTERM to the workers (which remove their temporary files and exit; they ignore SIGINT,
   so the terminal's Ctrl-C reaches them only through this process), kills any that have not
@@ -18,18 +24,90 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 import signal
+import sys
+import threading
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-__all__ = ["run_pool", "STOP_WAIT"]
+from ..errors import EnvconvError
+
+__all__ = ["run_pool", "STOP_WAIT", "WorkerStartError"]
 
 log = logging.getLogger(__name__)
 
 #: Seconds interrupted workers get to remove their temporary files before they are killed.
 STOP_WAIT = 0.3
+#: The index a worker sends, with its pid, once it has imported everything and is ready.
+_READY = -1
+#: Bytes of a starting worker's stderr kept to find the cause of its death.
+_KEPT = 1 << 16
+#: The last line of a Python traceback: the exception's name and message.
+_EXCEPTION_LINE = re.compile(r"^(?:[\w.]+\.)?(\w+(?:Error|Exception|Exit|Interrupt)): ?(.*)$")
+
+
+class WorkerStartError(EnvconvError):
+    """A batch worker process died before it was ready: no worker can run the jobs."""
+
+
+class _Stderr:
+    """A worker's stderr: a pipe this process reads on a thread. Until the worker is ready what
+    it writes is kept, the tail of it, to say why it died; after, it is passed on to this
+    process's stderr as it comes."""
+
+    def __init__(self) -> None:
+        self.read_fd, self.write_fd = os.pipe()
+        self.kept = bytearray()
+        self.ready = False
+        self.lock = threading.Lock()
+        self.thread = threading.Thread(target=self._pump, name="envconv-worker-stderr",
+                                       daemon=True)  # fmt: skip
+
+    def _pump(self) -> None:
+        try:
+            while chunk := os.read(self.read_fd, 65536):
+                with self.lock:
+                    if self.ready:
+                        _write_all(2, chunk)
+                    else:
+                        self.kept += chunk
+                        del self.kept[:-_KEPT]
+        except OSError:
+            pass
+        finally:
+            os.close(self.read_fd)
+
+    def set_ready(self) -> None:
+        """The worker is ready: pass on what it wrote so far and from now on."""
+        with self.lock:
+            self.ready = True
+            kept, self.kept = bytes(self.kept), bytearray()
+        if kept:
+            _write_all(2, kept)
+
+    def cause(self) -> str:
+        """The one line that says why a worker died before it was ready: the last exception
+        line of its traceback (else its last line), once it has all been read."""
+        self.thread.join(1.0)
+        with self.lock:
+            lines = [ln.strip() for ln in self.kept.decode("utf-8", "replace").splitlines()]
+        lines = [ln for ln in lines if ln]
+        for line in reversed(lines):
+            match = _EXCEPTION_LINE.match(line)
+            if match:
+                return f"{match.group(1)}: {match.group(2)}".rstrip(": ")
+        return lines[-1] if lines else "it printed nothing"
+
+
+def _write_all(fd: int, data: bytes) -> None:
+    try:
+        while data:
+            data = data[os.write(fd, data) :]
+    except OSError:  # stderr closed: nothing to pass on to
+        pass
 
 
 def _worker_main(conn, call, init) -> None:
@@ -39,6 +117,7 @@ def _worker_main(conn, call, init) -> None:
 
     install(sigint=False, quiet=True)
     init()
+    conn.send((_READY, os.getpid()))
     try:
         while True:
             try:
@@ -57,7 +136,9 @@ def _worker_main(conn, call, init) -> None:
 class _Worker:
     process: Any
     conn: Any
+    stderr: _Stderr
     index: int | None = None
+    ready: bool = False
 
 
 def _cause(exitcode: int | None) -> str:
@@ -91,13 +172,16 @@ class _Pool:
         # Ctrl-C while it starts reaches only this process.
         mask = getattr(signal, "pthread_sigmask", None)
         blocked = mask(signal.SIG_BLOCK, {signal.SIGINT}) if mask else None
+        stderr = _Stderr()
         try:
-            process.start()
+            _start_with_stderr(process, stderr.write_fd)
         finally:
             if mask:
                 mask(signal.SIG_SETMASK, blocked)
+            os.close(stderr.write_fd)
+        stderr.thread.start()
         theirs.close()
-        worker = _Worker(process, mine)
+        worker = _Worker(process, mine, stderr)
         self._dispatch(worker)
         return worker
 
@@ -130,7 +214,13 @@ class _Pool:
         try:
             index, record = worker.conn.recv()
         except (EOFError, OSError):
+            index = None
+        if index is None:  # (outside the except: a start failure is not "during" an EOFError)
             self._died(worker)
+            return
+        if index == _READY:
+            worker.ready = True
+            worker.stderr.set_ready()
             return
         if index in self.notes:
             record = {**record, "note": self.notes[index]}
@@ -142,6 +232,8 @@ class _Pool:
         worker.process.join(1.0)
         cause = _cause(worker.process.exitcode)
         worker.conn.close()
+        if not worker.ready and (worker.process.exitcode or 0) >= 0:
+            raise WorkerStartError(_start_failure(worker, cause))
         index, name = worker.index, None
         if index is not None:
             name = self.jobs[index].name
@@ -208,6 +300,36 @@ class _Pool:
                     continue
                 folders.update(os.path.dirname(p) for p in outputs)
         return folders
+
+
+def _start_with_stderr(process, fd: int) -> None:
+    """Start ``process`` with ``fd`` as its stderr: a spawned process inherits descriptor 2,
+    so it is pointed there for the moment of the start (this process's own stderr, flushed
+    first, is back when ``start`` returns)."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    try:
+        os.dup2(fd, 2)
+        process.start()
+    finally:
+        os.dup2(saved, 2)
+        os.close(saved)
+
+
+def _start_failure(worker: _Worker, cause: str) -> str:
+    """The one line of a worker that died before it was ready. A spawned worker runs the main
+    script again (as ``__mp_main__``) to find what the jobs refer to; a script that starts the
+    batch outside ``if __name__ == "__main__":`` starts it again there, which multiprocessing
+    refuses ("... before the current process has finished its bootstrapping phase")."""
+    why = worker.stderr.cause()
+    with worker.stderr.lock:
+        text = worker.stderr.kept.decode("utf-8", "replace")
+    if "bootstrapping phase" in text:
+        script = os.path.basename(getattr(sys.modules.get("__main__"), "__file__", "") or "")
+        return (f"batch workers cannot start: each worker runs the script {script or ''} again "
+                "as it starts, and the script starts the batch again; put the code that starts "
+                'the batch under `if __name__ == "__main__":` (docs/python.md)')  # fmt: skip
+    return f"batch workers cannot start: a worker died before it was ready ({cause}): {why}"
 
 
 def run_pool(
