@@ -139,3 +139,27 @@ def test_pixels_outside_the_valid_region_are_ignored_on_input(sky, name):
     a = envconv.convert(clean, "latlong", size=16, samples=2)
     b = envconv.convert(envconv.EnvMap(dirty, name), "latlong", size=16, samples=2)
     np.testing.assert_allclose(b.pixels, a.pixels, rtol=1e-5, atol=1e-6)
+
+
+def test_a_channel_named_alpha_is_the_alpha_channel_everywhere(tmp_path):
+    """One rule (envconv.envmap.is_alpha) for every reader of channel names: a lower-case
+    'alpha' channel is overwritten by --alpha's coverage rather than joined by an A (resample
+    and the plan agree), stored as unassociated alpha in a PNG, and read back as alpha."""
+    import OpenImageIO as oiio
+
+    from envconv.resample.options import output_channels
+
+    pixels = np.ones((8, 16, 4), np.float32)
+    source = envconv.EnvMap(pixels, "latlong", channels=("R", "G", "B", "alpha"))
+    out = envconv.convert(source, "sphere", size=8, alpha=True)
+    assert out.channels == output_channels(source.channels, True) == ("R", "G", "B", "alpha")
+    coverage = out.pixels[..., 3]
+    assert coverage[4, 4] == 1.0 and coverage[0, 0] < 0.5  # the disk's coverage, not the input
+    path = tmp_path / "ball.png"
+    envconv.write(out, path)
+    assert oiio.ImageInput.open(str(path)).spec().alpha_channel == 3
+    back = envconv.read(path, layout="sphere")
+    assert back.alpha_index == 3
+    rim = (back.pixels[..., 3] > 0.05) & (back.pixels[..., 3] < 0.95)
+    # Stored unassociated: a rim pixel's colour is the constant 1, not 1 x its coverage.
+    assert rim.any() and np.allclose(back.pixels[rim][:, :3], 1.0, atol=0.01)
