@@ -9,6 +9,7 @@ from __future__ import annotations
 from typing import Any
 
 from .. import io
+from ..errors import LayoutError, UsageError
 from ..layouts import get_layout
 from .steps import count_levels
 
@@ -50,12 +51,16 @@ def check_levels(layout: str, template: str, request: dict[str, Any]) -> None:
 
 
 def check_conventions(kwargs: dict[str, Any], source_layout=None) -> None:
-    """Refuse a resample's conventions that do not fit its layouts (the output's from the
-    arguments; the input's once ``source_layout`` is known from the header), with the rule of
-    :func:`envconv.resample.options.check_conventions`, and ``--up z`` with ``--axes``."""
+    """Refuse, as bad usage, a resample's conventions that do not fit its layouts (the
+    output's from the arguments; the input's once ``source_layout`` is known from the
+    header), with the rule of :func:`envconv.resample.options.check_conventions`, and
+    ``--up z`` with ``--axes``."""
     from ..layouts.conventions import environment_axes
     from ..resample.options import check_conventions as check
 
     environment_axes(kwargs.get("up"), kwargs.get("axes"))  # --up z with --axes
-    check(kwargs["to"], kwargs.get("out_convention"), kwargs.get("mips"), source_layout,
-          kwargs.get("in_convention"), kwargs.get("guard", 0))  # fmt: skip
+    try:
+        check(kwargs["to"], kwargs.get("out_convention"), kwargs.get("mips"), source_layout,
+              kwargs.get("in_convention"), kwargs.get("guard", 0))  # fmt: skip
+    except LayoutError as exc:  # a convention named for another layout: the user's arguments
+        raise UsageError(str(exc)) from None

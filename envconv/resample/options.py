@@ -130,18 +130,17 @@ def output_channels(channels, alpha: bool) -> tuple[str, ...]:
 def check_conventions(to: Layout | str, out_convention=None, mips=None, source=None,
                       in_convention=None, guard=0):  # fmt: skip
     """(in, out) :class:`~envconv.layouts.conventions.Convention` of a resample to ``to`` from
-    a ``source`` layout (None: not known yet, the input convention is not resolved), or
-    UsageError: a convention named for a layout it does not apply to, an output convention
-    that moves cells with a mip chain (its levels would mix moved cells), and one on another
-    sample grid with a mip chain or a guard ring (:func:`envconv.resample.regrid.check_output_grid`)."""
-    from ..errors import LayoutError
+    a ``source`` layout (None: not known yet, the input convention is not resolved).
+
+    Raises LayoutError for a convention named for a layout it does not apply to
+    (:func:`~envconv.layouts.conventions.resolve_convention`; the engine refuses it as bad
+    usage before any pixel is read), and UsageError for an output convention that moves
+    cells with a mip chain (its levels would mix moved cells) or one on another sample grid
+    with a mip chain or a guard ring (:func:`envconv.resample.regrid.check_output_grid`)."""
     from .regrid import check_output_grid
 
-    try:
-        cout = resolve_convention(out_convention, to)
-        cin = None if source is None else resolve_convention(in_convention, source)
-    except LayoutError as exc:
-        raise UsageError(str(exc)) from None
+    cout = resolve_convention(out_convention, to)
+    cin = None if source is None else resolve_convention(in_convention, source)
     chain = check_mips(mips)[0] is not None
     check_output_grid(cout, chain, guard)
     if cout.remap is not None and chain:
