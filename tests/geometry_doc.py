@@ -7,7 +7,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-__all__ = ["DOC", "AXES", "TOP", "BOTTOM", "RIM", "known_directions"]
+__all__ = ["DOC", "AXES", "TOP", "BOTTOM", "RIM", "OUTSIDE", "known_directions"]
 
 DOC = Path(__file__).resolve().parent.parent / "docs" / "geometry.md"
 #: The table's columns, in order: the six axes and q.
@@ -21,6 +21,7 @@ AXES = {
     "q": (0.48, 0.6, 0.64),
 }
 TOP, BOTTOM, RIM = "top row", "bottom row", "rim"
+OUTSIDE = "outside"  # a view's default field of view does not see it
 _HEADING = "## Where known directions land (u, v)"
 _POINT = re.compile(r"\(\s*([-\d.]+)\s*,\s*([-\d.]+)\s*\)")
 
@@ -28,7 +29,7 @@ _POINT = re.compile(r"\(\s*([-\d.]+)\s*,\s*([-\d.]+)\s*\)")
 def _entry(cell: str):
     """(u, v); a list of (u, v) that are all right ("(0, 0.5) = (1, 0.5)"); or a word."""
     cell = cell.strip()
-    if cell in (TOP, BOTTOM, RIM):
+    if cell in (TOP, BOTTOM, RIM, OUTSIDE):
         return cell
     points = [(float(u), float(v)) for u, v in _POINT.findall(cell)]
     if not points or _POINT.sub("", cell).replace("=", "").strip():

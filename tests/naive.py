@@ -76,8 +76,20 @@ GRIDS = {
     "tennisball": ("tennisball", 1, 2, 3, ((0, 0, 0, False), (0, 1, 1, False))),
     "octahedral": ("octahedral", 1, 1, 1, ((0, 0, 0, False),)),
     "equal-area": ("equal-area", 1, 1, 1, ((0, 0, 0, False),)),
+    # ffmpeg v360 eac: faces in a 3 x 2 grid, each in its own cell, turned by its own formula.
+    "eac": ("eac", 3, 2, 1, tuple((k % 3, k // 3, k, False) for k in range(6))),
+    # The registry's default views: fisheye fov 180, perspective fov 90 x 90, both at +Z.
+    "fisheye": ("fisheye", 1, 1, 1, ((0, 0, 0, False),)),
+    "perspective": ("perspective", 1, 1, 1, ((0, 0, 0, False),)),
 }
-DISK_FAMILIES = ("sphere", "angular", "paraboloid")
+DISK_FAMILIES = ("sphere", "angular", "paraboloid", "fisheye")
+#: Layouts that cover part of the sphere with their default view, and the test of what they see.
+PARTIAL = {
+    "fisheye": lambda d: np.asarray(d)[..., 2] > 0,  # fov 180: the front hemisphere
+    "perspective": lambda d: np.all(  # fov 90 x 90: |x|, |y| < z
+        np.abs(np.asarray(d)[..., :2]) < np.asarray(d)[..., 2:], axis=-1
+    ),
+}
 OCTAHEDRAL_FAMILIES = ("octahedral", "equal-area")
 
 
@@ -171,6 +183,49 @@ def _octahedral_family(family, a, b):
     return np.stack([t[..., 0], t[..., 2], -t[..., 1]], -1)
 
 
+def _from_ffmpeg(x, y, z):
+    """ffmpeg v360's frame (x right, y down, z front; its "front" the lat-long's centre, its
+    right the lat-long's right of it) in envconv's: (−x, −y, z)."""
+    return _normalise(-x, -y, z)
+
+
+def _eac(face, ea, eb):
+    """ffmpeg 5.1 vf_v360.c ``eac_to_xyz`` without its padding: uf, vf = tan(π/2 · e/2), then
+    the six cells' vectors as the switch writes them (TOP_LEFT … BOTTOM_RIGHT)."""
+    uf = np.tan(0.25 * math.pi * ea)
+    vf = np.tan(0.25 * math.pi * eb)
+    one = np.ones_like(uf)
+    table = [
+        (-one, vf, uf),  # TOP_LEFT
+        (uf, vf, one),  # TOP_MIDDLE
+        (one, vf, -uf),  # TOP_RIGHT
+        (-vf, one, -uf),  # BOTTOM_LEFT
+        (-vf, -uf, -one),  # BOTTOM_MIDDLE
+        (-vf, -one, uf),  # BOTTOM_RIGHT
+    ]
+    x, y, z = (np.choose(face, [t[k] for t in table]) for k in range(3))
+    return _from_ffmpeg(x, y, z)
+
+
+def fisheye_dir(a, b, fov=180.0):
+    """ffmpeg 5.1 ``fisheye_to_xyz`` with h_fov = v_fov = ``fov`` at image point (a, b):
+    uf, vf = (fov/180)(a, b), φ = atan2(vf, uf), θ = π/2 (1 − |(uf, vf)|),
+    vec = (cos θ cos φ, cos θ sin φ, sin θ)."""
+    uf, vf = fov / 180.0 * a, fov / 180.0 * b
+    phi = np.arctan2(vf, uf)
+    theta = 0.5 * math.pi * (1 - np.hypot(uf, vf))
+    return _from_ffmpeg(np.cos(theta) * np.cos(phi), np.cos(theta) * np.sin(phi), np.sin(theta))
+
+
+def perspective_dir(a, b, fov_h=90.0, fov_v=90.0):
+    """py360convert ``xyzpers`` at u_deg = v_deg = 0 at image point (a, b): (x, −y, 1) with
+    x = a tan(fov_h/2), y = b tan(fov_v/2), in its frame (x right, y up, z the lat-long's
+    centre, +x at u = 0.75 of its lat-long), which is envconv's with x negated."""
+    x = a * math.tan(math.radians(fov_h) / 2)
+    y = b * math.tan(math.radians(fov_v) / 2)
+    return _normalise(-x, -y, np.ones_like(x))
+
+
 def face_to_dir(family: str, face, a, b) -> np.ndarray:
     """Unit direction (..., 3) of local point (a, b) of ``face`` (inside the valid region)."""
     face = np.asarray(face)
@@ -209,6 +264,12 @@ def face_to_dir(family: str, face, a, b) -> np.ndarray:
             [np.sin(theta), np.sin(phi) * np.cos(theta), -np.cos(phi) * np.cos(theta)], -1
         )
         return np.where((face == 0)[..., None], c1, c2)
+    if family == "eac":
+        return _eac(face, a, b)
+    if family == "fisheye":
+        return fisheye_dir(a, b)
+    if family == "perspective":
+        return perspective_dir(a, b)
     raise ValueError(family)
 
 
@@ -237,6 +298,16 @@ def face_density(family: str, face, a, b) -> np.ndarray:
         return (cx * cx + cy * cy + cz * cz) ** -1.5
     if family == "tennisball":  # dΩ = cos θ dφ dθ, dφ = 3π/4 da, dθ = π/4 db
         return np.abs(np.cos(0.25 * math.pi * b)) * (0.75 * math.pi * 0.25 * math.pi)
+    if family == "eac":  # gnomonic at (tan πa/4, tan πb/4), times d tan(πe/4)/de twice
+        ta, tb = np.tan(0.25 * math.pi * a), np.tan(0.25 * math.pi * b)
+        rate = (0.25 * math.pi) ** 2 * (1 + ta * ta) * (1 + tb * tb)
+        return rate * (1 + ta * ta + tb * tb) ** -1.5
+    if family == "fisheye":  # θ = (π/2) R: (π/2) sin((π/2) R) / R
+        r = np.sqrt(r2)
+        h = 0.5 * math.pi
+        return np.where(r > 1e-12, h * np.sin(h * r) / np.where(r > 0, r, 1), h * h)
+    if family == "perspective":  # tan 45° = 1: the plane at distance 1
+        return (1 + r2) ** -1.5
     raise ValueError(family)
 
 

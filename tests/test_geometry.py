@@ -17,13 +17,26 @@ from envconv.layouts.geometry import (
 )
 
 NAMES = list(LAYOUTS)
-RECT = [
-    name for name in NAMES if name not in ("sphere", "angular", "paraboloid", "paraboloid-split")
-]
-DISKS = ["sphere", "angular", "paraboloid", "paraboloid-split"]
+DISKS = ["sphere", "angular", "paraboloid", "paraboloid-split", "fisheye"]
+RECT = [name for name in NAMES if name not in DISKS]
 # Tennisball's bands overlap (docs/geometry.md: about 6% of the sphere) and every pixel of both is
 # valid, so its pixels cover two bands of (3π/2) · 2 sin(π/4) sr each rather than 4π.
 TENNISBALL_AREA = 2 * (1.5 * math.pi) * (2 * math.sin(math.pi / 4))
+
+
+def _cap(fov_deg):
+    """Solid angle of a cone of full angle ``fov_deg`` (a fisheye's view)."""
+    return 2 * math.pi * (1 - math.cos(math.radians(fov_deg) / 2))
+
+
+def _pyramid(fov_h, fov_v):
+    """Solid angle of a rectangular pyramid of full angles fov_h × fov_v (a perspective view):
+    4 asin(sin(h/2) sin(v/2)), the spherical rectangle's area."""
+    return 4 * math.asin(math.sin(math.radians(fov_h) / 2) * math.sin(math.radians(fov_v) / 2))
+
+
+# What the layouts cover, when not the whole sphere: the partial ones with their default views.
+AREA = {"tennisball": TENNISBALL_AREA, "fisheye": _cap(180), "perspective": _pyramid(90, 90)}
 
 
 @pytest.mark.parametrize("name", NAMES)
@@ -83,14 +96,34 @@ def test_pixel_solid_angles_match_hand_derived_densities(name):
 @pytest.mark.parametrize("name", RECT)
 def test_solid_angles_sum_to_the_sphere_rect(name):
     total = pixel_solid_angles(name, 16, samples=4).sum()
-    expected = TENNISBALL_AREA if name == "tennisball" else 4 * math.pi
-    assert total == pytest.approx(expected, rel=1e-3)
+    assert total == pytest.approx(AREA.get(name, 4 * math.pi), rel=1e-3)
 
 
 @pytest.mark.parametrize("name", DISKS)
 def test_solid_angles_sum_to_the_sphere_disks(name):
     total = pixel_solid_angles(name, 32, samples=4).sum()
-    assert total == pytest.approx(4 * math.pi, rel=1e-2)
+    assert total == pytest.approx(AREA.get(name, 4 * math.pi), rel=1e-2)
+
+
+@pytest.mark.parametrize(
+    "name, options, area",
+    [
+        ("fisheye", {"fov": 250, "yaw": 40, "pitch": -20}, _cap(250)),
+        ("fisheye", {"fov": 360}, 4 * math.pi),
+        ("fisheye", {"fov": 60, "roll": 30}, _cap(60)),
+        ("perspective", {"fov": "100,60", "yaw": -70, "pitch": 35, "roll": 10}, _pyramid(100, 60)),
+        ("perspective", {"fov": 150, "width": 30, "height": 12}, None),
+    ],
+)
+def test_solid_angles_of_views_sum_to_what_they_cover(name, options, area):
+    """The cone of a fisheye, the pyramid of a perspective view, whichever way it looks."""
+    layout = get_layout(name).configure(**options)
+    if area is None:  # one fov across a 30 x 12 image: the vertical one from the aspect
+        v = 2 * math.degrees(math.atan(math.tan(math.radians(75)) * 12 / 30))
+        area = _pyramid(150, v)
+    n = layout.size_from_image(*layout.image_size(24))
+    total = pixel_solid_angles(layout, n, samples=4).sum()
+    assert total == pytest.approx(area, rel=1e-2 if layout.disk else 1e-3)
 
 
 def test_solid_angles_of_latlong_rows_are_exact():

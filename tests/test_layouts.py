@@ -8,7 +8,7 @@ import math
 import naive
 import numpy as np
 import pytest
-from geometry_doc import AXES, BOTTOM, RIM, TOP, known_directions
+from geometry_doc import AXES, BOTTOM, OUTSIDE, RIM, TOP, known_directions
 from hypothesis import assume, given
 from hypothesis import strategies as st
 
@@ -19,7 +19,7 @@ from envconv.layouts.geometry import dir_to_uv, pixel_directions, uv_to_dir
 ISSUE_LAYOUTS = [
     "latlong", "cube-vcross", "cube-hcross", "cube-hstrip", "cube-vstrip", "cube-exr",
     "cube-faces", "sphere", "angular", "paraboloid", "paraboloid-split", "tennisball",
-    "octahedral", "equal-area",
+    "octahedral", "equal-area", "eac", "fisheye", "perspective",
 ]  # fmt: skip
 
 # The table "Where known directions land (u, v)", read from docs/geometry.md itself.
@@ -35,10 +35,17 @@ SIZE_RULE = {
     "latlong": (2, 1), "cube-vcross": (3, 4), "cube-hcross": (4, 3), "cube-hstrip": (6, 1),
     "cube-vstrip": (1, 6), "cube-exr": (1, 6), "cube-faces": (6, 1), "sphere": (1, 1),
     "angular": (1, 1), "paraboloid": (2, 1), "paraboloid-split": (2, 1), "tennisball": (3, 2),
-    "octahedral": (1, 1), "equal-area": (1, 1),
+    "octahedral": (1, 1), "equal-area": (1, 1), "eac": (3, 2), "fisheye": (1, 1),
+    "perspective": (1, 1),
 }  # fmt: skip
 MULTI_FILE = {"cube-faces": 6, "paraboloid-split": 2}
 DISKS = ("sphere", "angular", "paraboloid", "paraboloid-split")
+
+
+def _covered(name, d) -> bool:
+    """Whether layout ``name``'s default view sees direction ``d`` (always, unless partial)."""
+    return name not in naive.PARTIAL or bool(naive.PARTIAL[name](d))
+
 
 NUDGES = [(du, dv) for du in (0, -1, 1) for dv in (0, -1, 1)]
 
@@ -82,6 +89,9 @@ def test_known_directions_land_where_the_table_says(name, n):
         elif expected == RIM:
             radius = math.hypot(2 * got[0] - 1, 2 * got[1] - 1)
             assert radius == pytest.approx(1.0, abs=1e-4), label
+        elif expected == OUTSIDE:  # sent to the edge of the image (its reach, without guard)
+            assert not _covered(name, dirs[k]), label
+            assert min(got[0], 1 - got[0], got[1], 1 - got[1]) < 1e-9, (label, got)
         elif isinstance(expected, list):
             assert any(np.allclose(got, e, atol=1e-4) for e in expected), (label, got)
         else:
@@ -120,6 +130,9 @@ directions = st.one_of(st.sampled_from(SPECIAL_DIRS), random_dirs.map(_unit))
 @pytest.mark.parametrize("name", ISSUE_LAYOUTS)
 @given(d=directions)
 def test_dir_to_uv_to_dir_round_trip(name, d):
+    if name in naive.PARTIAL:  # into the default view (|x|, |y| < z): no direction filtered out
+        d = _unit((d[0], d[1], abs(d[2]) + 1.01 * (abs(d[0]) + abs(d[1]))))
+        assert _covered(name, d)
     u, v = dir_to_uv(name, d, size=16)
     assert 0.0 <= u <= 1.0 and 0.0 <= v <= 1.0
     assert _closest_dir(name, float(u), float(v), d) < 1e-6

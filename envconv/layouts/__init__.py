@@ -17,11 +17,14 @@ from . import (
     cube_hcross,
     cube_strip,
     cube_vcross,
+    eac,
     equal_area,
+    fisheye,
     latlong,
     octahedral,
     paraboloid,
     paraboloid_split,
+    perspective,
     sphere,
     tennisball,
 )
@@ -53,6 +56,9 @@ _MODULE_LAYOUTS = (
     tennisball.LAYOUT,
     octahedral.LAYOUT,
     equal_area.LAYOUT,
+    eac.LAYOUT,
+    fisheye.LAYOUT,
+    perspective.LAYOUT,
 )
 
 #: Every registered layout, by name, in documentation order.

@@ -11,15 +11,24 @@ Pixel-centre rule: pixel (i, j) of a W×H image covers [i/W, (i+1)/W] × [j/H, (
 centre is at ((i + 0.5)/W, (j + 0.5)/H). With a guard ring of G pixels every cell grows by G on
 each side; inside a grown cell whose top-left pixel is (x0, y0),
 ``a = 2 (x + 0.5 - x0 - G) / (aspect N) - 1`` and ``b = 2 (y + 0.5 - y0 - G) / N - 1``.
+
+Aimed layouts (fisheye, perspective) carry their view, the field of view and the view frame, in
+``params`` (the chart's parameters, passed to the core's maps) and ``view`` (the options as
+given, for metadata and messages); :meth:`Layout.configure` makes one from options. A layout
+that covers only part of the sphere is ``partial``: as a source, the directions it does not
+cover are holes (:mod:`envconv.resample.partial`).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from fractions import Fraction
+from typing import Any
 
 import numpy as np
 
-from ..errors import LayoutError
+from ..errors import LayoutError, UsageError
 
 # Geometry family codes: the native core's own (src/core/layouts.h, exported by
 # src/core/module.cpp), which its kernels dispatch on; never restated here.
@@ -28,12 +37,16 @@ from ..resample.kernels import (
     FAMILY_ANGULAR,
     FAMILY_CUBE_EXR,
     FAMILY_CUBE_GL,
+    FAMILY_EAC,
     FAMILY_EQUAL_AREA,
+    FAMILY_FISHEYE,
     FAMILY_LATLONG,
     FAMILY_OCTAHEDRAL,
     FAMILY_PARABOLOID,
+    FAMILY_PERSPECTIVE,
     FAMILY_SPHERE,
     FAMILY_TENNISBALL,
+    PARAM_COUNT,
 )
 
 __all__ = [
@@ -49,8 +62,21 @@ __all__ = [
     "FAMILY_OCTAHEDRAL",
     "FAMILY_EQUAL_AREA",
     "DISK_FAMILIES",
+    "FAMILY_EAC",
+    "FAMILY_FISHEYE",
+    "FAMILY_PERSPECTIVE",
+    "PARAM_COUNT",
+    "PARTIAL_PAD",
+    "VIEW_OPTIONS",
 ]
 
+#: Index of the reach among a chart's PARAM_COUNT parameters (src/core/layouts.h kReach).
+_REACH = 11
+#: Pixels of holes a partial source is padded with, around its cells (its guard ring grows by
+#: as much); directions it does not cover land in the middle of that ring (its reach).
+PARTIAL_PAD = 6
+#: The options an aimed layout takes (:meth:`Layout.configure`).
+VIEW_OPTIONS = ("fov", "yaw", "pitch", "roll")
 
 @dataclass(frozen=True)
 class Cell:
@@ -80,14 +106,26 @@ class Layout:
         One line for ``envconv layouts``.
     columns, rows : int
         Grid of cells, in cells.
-    aspect : int
-        Cell width in units of N (the cell height is always N): 2 for lat-long, 3 for tennisball.
+    aspect : int or Fraction
+        Cell width in units of N (the cell height is always N): 2 for lat-long, 3 for
+        tennisball; a perspective view's width : height.
     cells : tuple of Cell
         Occupied cells; grid cells not listed hold no face and are invalid.
     face_names : tuple of str
         Names of the faces, in face-index order (also the file-part names of multi-file layouts).
     multi_file : bool
         True when the layout is stored as one file per cell, named with ``{face}``.
+    params : tuple of float
+        The chart's parameters for the core's maps (``PARAM_COUNT`` of them, or none for a
+        family that takes none).
+    view : tuple of (str, object)
+        An aimed layout's options (``fov``, ``yaw``, ``pitch``, ``roll``), as
+        :meth:`configure` resolved them; empty for the others.
+    partial : bool
+        True when the layout covers only part of the sphere.
+    configurer : callable, optional
+        ``configurer(layout, fov=, yaw=, pitch=, roll=, width=, height=)``: the layout module's
+        rule for a configured copy (:meth:`configure`); None for a layout without options.
     """
 
     name: str
@@ -95,10 +133,46 @@ class Layout:
     description: str
     columns: int
     rows: int
-    aspect: int
+    aspect: int | Fraction
     cells: tuple[Cell, ...]
     face_names: tuple[str, ...]
     multi_file: bool = False
+    params: tuple[float, ...] = ()
+    view: tuple[tuple[str, Any], ...] = ()
+    partial: bool = False
+    configurer: Callable[..., Layout] | None = field(default=None, compare=False, repr=False)
+
+    def configure(self, **options: Any) -> Layout:
+        """A copy of this layout with view options (``fov``, ``yaw``, ``pitch``, ``roll``) and,
+        for a perspective view, its ``width`` and ``height`` in pixels; options left None keep
+        their value. UsageError for an option the layout does not take or a bad value."""
+        given = {k: v for k, v in options.items() if v is not None}
+        if self.configurer is None:
+            if given:
+                names = ", ".join(f"--{k}" for k in given)
+                raise UsageError(f"{names} applies to the aimed layouts (fisheye, perspective), "
+                                 f"not to {self.name}")  # fmt: skip
+            return self
+        return self.configurer(self, **given)
+
+    @property
+    def view_options(self) -> dict[str, Any]:
+        """The view options as a dict (empty for layouts without a view)."""
+        return dict(self.view)
+
+    def kernel_params(self, n: int | None = None, guard: int = 0) -> np.ndarray:
+        """The chart's ``PARAM_COUNT`` parameters for the core; a partial layout's reach puts
+        uncovered directions in the middle of a guard ring padded by :data:`PARTIAL_PAD`."""
+        params = np.zeros(PARAM_COUNT)
+        params[: len(self.params)] = self.params
+        if self.partial and n:
+            params[_REACH] = 1.0 + 2.0 * max(guard - PARTIAL_PAD // 2, 0) / n
+        return params
+
+    def content_width(self, n: int) -> int:
+        """N_x: a cell's width in pixels without guard, aspect × N (rounded: a perspective
+        view's aspect is its own width : height)."""
+        return int(round(self.aspect * n))
 
     @property
     def disk(self) -> bool:
@@ -111,7 +185,7 @@ class Layout:
 
     def cell_size(self, n: int, guard: int = 0) -> tuple[int, int]:
         """Width and height in pixels of one (grown) cell."""
-        return self.aspect * n + 2 * guard, n + 2 * guard
+        return self.content_width(n) + 2 * guard, n + 2 * guard
 
     def image_size(self, n: int, guard: int = 0) -> tuple[int, int]:
         """Image width and height in pixels for characteristic size ``n`` and guard ``guard``.
@@ -131,7 +205,7 @@ class Layout:
             raise LayoutError(self._misfit(width, height, guard))
         cw, ch = width // self.columns, height // self.rows
         n = ch - 2 * guard
-        if n < 1 or cw != self.aspect * n + 2 * guard:
+        if n < 1 or cw != self.content_width(n) + 2 * guard:
             raise LayoutError(self._misfit(width, height, guard))
         return n
 
@@ -152,19 +226,19 @@ class Layout:
         continued past the valid region as guard rings and filter taps read it."""
         from ..resample.kernels import face_to_dir
 
-        return face_to_dir(self.family, face, a, b)
+        return face_to_dir(self.family, face, a, b, self.kernel_params())
 
     def dir_to_face(self, dirs) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """(face, a, b) of unit directions (..., 3), with (a, b) in the face's valid region."""
         from ..resample.kernels import dir_to_face
 
-        return dir_to_face(self.family, dirs)
+        return dir_to_face(self.family, dirs, self.kernel_params())
 
     def density(self, face, a, b) -> np.ndarray:
         """Solid angle per unit (a, b) area, in steradians, at local points of ``face``."""
         from ..resample.kernels import density
 
-        return density(self.family, face, a, b)
+        return density(self.family, face, a, b, self.kernel_params())
 
     def kernel_tables(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Integer tables the kernels read: cell → face, cell → turns, face → cell.

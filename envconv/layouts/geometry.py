@@ -26,12 +26,12 @@ __all__ = [
 
 
 def kernel_geometry(layout: Layout | str, size: int, guard: int = 0):
-    """The (geo, cell_face, cell_turns, face_cell) arrays the kernels take."""
+    """The (geo, cell_face, cell_turns, face_cell) arrays the kernels take: ``geo`` is
+    [family, N, G, N_x, columns, rows, the chart's parameters] (float64)."""
     layout = get_layout(layout)
     layout.validate_size(size)
-    geo = np.array(
-        [layout.family, size, guard, layout.aspect, layout.columns, layout.rows], np.int64
-    )
+    head = [layout.family, size, guard, layout.content_width(size), layout.columns, layout.rows]
+    geo = np.concatenate([np.array(head, np.float64), layout.kernel_params(size, guard)])
     return (geo, *layout.kernel_tables())
 
 
@@ -101,15 +101,20 @@ def pixel_pitch(layout, dirs: np.ndarray) -> np.ndarray:
     layout = get_layout(layout)
     dens = kernels.dir_density(kernel_geometry(layout, 64, 0), dirs)
     # A pixel spans 2/(aspect N) × 2/N in (a, b).
-    return np.sqrt(dens * 4.0 / layout.aspect)
+    return np.sqrt(dens * 4.0 / float(layout.aspect))
 
 
 def horizon_pitch(layout) -> float:
     """Mean angular pixel pitch (radians × N) along the horizon, for a layout of size N = 1.
 
     The pitch at a direction is √Ω of a pixel there. Averaged over 360 horizon directions, it
-    is k in ``pitch = k / N``: π for lat-long, about 1.68 for cube faces.
+    is k in ``pitch = k / N``: π for lat-long, about 1.68 for cube faces. An aimed layout
+    (fisheye, perspective), which may not see the horizon, gives its pitch at its view axis.
     """
+    layout = get_layout(layout)
+    if layout.view:
+        axis = np.asarray(layout.params[2:11]).reshape(3, 3)[:, 2]  # the frame's third column
+        return float(pixel_pitch(layout, axis[None, :])[0])
     phi = (np.arange(360) + 0.5) * (2 * math.pi / 360)
     dirs = np.stack([np.sin(phi), np.zeros_like(phi), np.cos(phi)], -1)
     return float(np.mean(pixel_pitch(layout, dirs)))

@@ -62,6 +62,7 @@ from .options import (
     check_samples,
     default_size,
     output_channels,
+    output_layout,
 )
 from .regrid import output_on_grid, source_on_centres
 
@@ -87,6 +88,10 @@ def convert(
     out_convention=None,
     up: str | None = None,
     axes: str | None = None,
+    fov=None,
+    yaw: float | None = None,
+    pitch: float | None = None,
+    roll: float | None = None,
 ) -> EnvMap:
     """Resample ``envmap`` into layout ``to``.
 
@@ -96,10 +101,12 @@ def convert(
         The source. All its channels are resampled (an alpha channel is carried like colour).
     to : str or Layout
         Output layout name, e.g. ``"cube-vcross"``.
-    size : int, optional
+    size : int, str or (int, int), optional
         Output characteristic size N (docs/geometry.md, "Sizes"). Default: the N that keeps
-        the source's pixel pitch along the horizon, rounded with ``mips`` so that every level
-        holds whole cells (:func:`envconv.resample.options.default_size`).
+        the source's pixel pitch along the horizon (an aimed layout's: at its view axis),
+        rounded with ``mips`` so that every level holds whole cells
+        (:func:`envconv.resample.options.default_size`). A perspective view also takes
+        ``"WxH"`` or (W, H).
     samples : int or "auto"
         Sub-samples per pixel edge S (S×S per pixel).
     filter : {"bilinear", "bicubic", "nearest"}
@@ -130,6 +137,11 @@ def convert(
         Up axis of the input's world; ``"z"`` turns its +Z into +Y (same as ``axes="x,z,-y"``).
     axes : str, optional
         Signed axis permutation applied to the input's environment, e.g. ``"-x,z,y"``.
+    fov, yaw, pitch, roll : optional
+        The view of an aimed output layout (fisheye, perspective; see
+        :mod:`envconv.layouts.view`): ``fov`` in degrees (a fisheye's diameter, 180 by default;
+        a perspective view's horizontal angle or ``"H,V"``, 90 by default), ``yaw`` turns the
+        view right, ``pitch`` up, ``roll`` about its axis. Other layouts refuse them.
 
     Returns
     -------
@@ -144,10 +156,15 @@ def convert(
     >>> cube.pixels.shape
     (128, 96, 3)
     """
+    to, size = output_layout(envmap, to, size, fov, yaw, pitch, roll, out_convention, mips, guard)
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
     _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
+    if envmap.layout.partial:
+        from .partial import pad_partial
+
+        envmap = pad_partial(envmap)
     if envmap.valid is not None or envmap.parts:
         from .holes import convert_with_holes
 
@@ -213,7 +230,7 @@ def _resample(
     # Zeroed (np.zeros maps fresh pages lazily): the kernel then never touches the empty cells.
     out = np.zeros((height, width, src.shape[2] + int(direct_alpha)), np.float32)
     same_grid = (
-        to.name == envmap.layout.name
+        to == envmap.layout
         and size == envmap.size
         and guard_px == envmap.guard
         and n_samples in (None, 1)

@@ -3,8 +3,9 @@
 Each function checks and converts its arrays (C-contiguous, the dtype the core takes),
 allocates what it returns, and runs the core with the GIL released on :func:`get_threads`
 threads. Geometry arrives as the four arrays of :func:`envconv.layouts.geometry.kernel_geometry`:
-``geo = [family, N, G, aspect, columns, rows]`` (int64) and the int32 tables cell → face,
-cell → half turns, face → cell. Image points are level-0 pixels, x right and y down; pixel
+``geo = [family, N, G, N_x, columns, rows, then the chart's PARAM_COUNT parameters]`` (float64;
+N_x is a cell's width without guard) and the int32 tables cell → face, cell → half turns,
+face → cell. Image points are level-0 pixels, x right and y down; pixel
 (i, j) spans [i, i+1) × [j, j+1).
 
 Threads: one per core by default (the CPUs this process may run on); ``ENVCONV_THREADS`` or
@@ -31,7 +32,8 @@ __all__ = [
     "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
     "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES", "FAMILY_LATLONG", "FAMILY_CUBE_GL",
     "FAMILY_CUBE_EXR", "FAMILY_SPHERE", "FAMILY_ANGULAR", "FAMILY_PARABOLOID", "FAMILY_TENNISBALL",
-    "FAMILY_OCTAHEDRAL", "FAMILY_EQUAL_AREA", "DISK_FAMILIES",
+    "FAMILY_OCTAHEDRAL", "FAMILY_EQUAL_AREA", "FAMILY_EAC", "FAMILY_FISHEYE", "FAMILY_PERSPECTIVE",
+    "DISK_FAMILIES", "PARAM_COUNT",
 ]  # fmt: skip
 
 FILTER_NEAREST, FILTER_BILINEAR, FILTER_BICUBIC = 0, 1, 2
@@ -46,8 +48,14 @@ FAMILY_PARABOLOID = _core.FAMILY_PARABOLOID
 FAMILY_TENNISBALL = _core.FAMILY_TENNISBALL
 FAMILY_OCTAHEDRAL = _core.FAMILY_OCTAHEDRAL
 FAMILY_EQUAL_AREA = _core.FAMILY_EQUAL_AREA
+FAMILY_EAC = _core.FAMILY_EAC
+FAMILY_FISHEYE = _core.FAMILY_FISHEYE
+FAMILY_PERSPECTIVE = _core.FAMILY_PERSPECTIVE
 #: Families whose valid region in a cell is the unit disk a² + b² ≤ 1 (``is_disk`` in the core).
 DISK_FAMILIES = tuple(_core.DISK_FAMILIES)
+#: Parameters of every chart (src/core/layouts.h kParamCount): two scales, the view frame (9,
+#: row-major) and the reach of dir_to_face.
+PARAM_COUNT = _core.PARAM_COUNT
 #: Output tiles of TILE × TILE pixels interpolate the map (src/core/tiles.h).
 TILE = _core.TILE
 #: A lat-long pixel spanning X texels along x reads rip-map level k, the largest with
@@ -152,7 +160,7 @@ def _c(array, dtype) -> np.ndarray:
 def _geo(geometry):
     geo, cell_face, cell_turns, face_cell = geometry
     return (
-        _c(geo, np.int64),
+        _c(geo, np.float64),
         _c(cell_face, np.int32),
         _c(cell_turns, np.int32),
         _c(face_cell, np.int32),
@@ -283,32 +291,43 @@ def _flat_points(face, a, b):
     )
 
 
-def face_to_dir(family: int, face, a, b) -> np.ndarray:
-    """Unit directions (..., 3) of points (a, b) of faces of geometry ``family``, continued
-    past the valid region (see src/core/layouts.h)."""
+def _params(params) -> np.ndarray:
+    """The chart's parameters as the core takes them: PARAM_COUNT float64, zeros past those
+    given."""
+    out = np.zeros(PARAM_COUNT)
+    values = np.asarray(params if params is not None else (), np.float64).ravel()
+    out[: values.size] = values
+    return out
+
+
+def face_to_dir(family: int, face, a, b, params=None) -> np.ndarray:
+    """Unit directions (..., 3) of points (a, b) of faces of geometry ``family`` with chart
+    ``params``, continued past the valid region (see src/core/layouts.h)."""
     shape, face, a, b = _flat_points(face, a, b)
     out = np.empty((a.size, 3))
-    _core.face_to_dir(int(family), face, a, b, out)
+    _core.face_to_dir(int(family), _params(params), face, a, b, out)
     return out.reshape(*shape, 3)
 
 
-def dir_to_face(family: int, dirs):
-    """(face, a, b) arrays of unit directions (..., 3) in geometry ``family``."""
+def dir_to_face(family: int, dirs, params=None):
+    """(face, a, b) arrays of unit directions (..., 3) in geometry ``family`` with chart
+    ``params``."""
     dirs = np.asarray(dirs, np.float64)
     shape = dirs.shape[:-1]
     flat = _c(dirs.reshape(-1, 3), np.float64)
     face = np.empty(flat.shape[0], np.int32)
     a = np.empty(flat.shape[0])
     b = np.empty(flat.shape[0])
-    _core.dir_to_face(int(family), flat, face, a, b)
+    _core.dir_to_face(int(family), _params(params), flat, face, a, b)
     return face.reshape(shape), a.reshape(shape), b.reshape(shape)
 
 
-def density(family: int, face, a, b) -> np.ndarray:
-    """Solid angle per unit (a, b) area (sr) at points (a, b) of faces of ``family``."""
+def density(family: int, face, a, b, params=None) -> np.ndarray:
+    """Solid angle per unit (a, b) area (sr) at points (a, b) of faces of ``family`` with chart
+    ``params``."""
     shape, face, a, b = _flat_points(face, a, b)
     out = np.empty(a.size)
-    _core.density(int(family), face, a, b, out)
+    _core.density(int(family), _params(params), face, a, b, out)
     return out.reshape(shape)
 
 

@@ -19,7 +19,7 @@ from ..layouts.conventions import resolve_convention
 from ..layouts.geometry import horizon_pitch
 
 __all__ = ["FILTERS", "MAX_SAMPLES", "default_size", "auto_samples", "check_samples", "check_guard",
-           "check_mips", "check_conventions", "output_channels"]  # fmt: skip
+           "check_mips", "check_conventions", "output_channels", "check_size", "output_layout"]  # fmt: skip
 
 #: Reconstruction filters by name → kernel code.
 FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
@@ -59,6 +59,50 @@ def default_size(source: EnvMap, to: Layout | str, out_convention=None, mips=Non
     while cell - 2 * guard < 1:
         cell += step
     return cell - 2 * guard
+
+
+def check_size(size) -> tuple[int | None, int | None]:
+    """(N, width) of ``size``: None (the default), N, ``"N"``, ``"WxH"`` or (W, H); width is
+    None unless a W × H size was given (a perspective view's, N being its height). UsageError
+    for anything else."""
+    if size is None:
+        return None, None
+    if isinstance(size, str):
+        parts = size.strip().lower().replace("×", "x").split("x")
+        if len(parts) not in (1, 2) or not all(p.strip().isdigit() for p in parts):
+            raise UsageError(f"size must be N or WxH in pixels, got {size!r}")
+        size = tuple(int(p) for p in parts) if len(parts) == 2 else int(parts[0])
+    if isinstance(size, (tuple, list)):
+        if len(size) != 2 or not all(isinstance(v, numbers.Integral) and v >= 1 for v in size):
+            raise UsageError(f"size must be N or (W, H), positive integers, got {size!r}")
+        return int(size[1]), int(size[0])
+    if isinstance(size, numbers.Integral) and not isinstance(size, bool) and size >= 1:
+        return int(size), None
+    raise UsageError(
+        f"size must be a positive integer (or WxH for a perspective view), got {size!r}"
+    )
+
+
+def output_layout(source: EnvMap, to: Layout | str, size=None, fov=None, yaw=None, pitch=None,
+                  roll=None, out_convention=None, mips=None,
+                  guard=0) -> tuple[Layout, int]:  # fmt: skip
+    """The output layout with its view options (:meth:`envconv.layouts.base.Layout.configure`:
+    ``fov``, ``yaw``, ``pitch``, ``roll``) and its size N: ``size``, or :func:`default_size`
+    (with ``mips`` and ``guard``).
+    A W × H ``size`` is a perspective view's own (N is its height); a view's width otherwise
+    follows from its aspect. UsageError for an option the layout does not take."""
+    to = get_layout(to)
+    n, width = check_size(size)
+    if width is not None and to.configurer is None:
+        raise UsageError(f"{to.name} takes --size N, not {width}x{n}; W x H is a perspective "
+                         "view's size")  # fmt: skip
+    view = {"fov": fov, "yaw": yaw, "pitch": pitch, "roll": roll}
+    layout = to.configure(**view, width=width, height=n if width is not None else None)
+    if n is None:
+        n = default_size(source, layout, out_convention, mips=mips, guard=guard)
+    if layout.configurer is not None and width is None:
+        layout = to.configure(**view, width=layout.content_width(n), height=n)
+    return layout, n
 
 
 def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float = 1.0) -> int:

@@ -1,10 +1,11 @@
 // Cell bookkeeping: image point <-> (face, a, b).
 //
 // A layout is a grid of columns x rows equal cells; each occupied cell holds one face, stored
-// unturned or turned by 180 degrees. With characteristic size N, cell aspect A and guard G a
-// cell is (A N + 2G) x (N + 2G) pixels. Image points are level-0 pixels: x right, y down, pixel
-// (i, j) spans [i, i+1) x [j, j+1). Inside a cell whose top-left pixel is (x0, y0):
-//   a = 2 (x - x0 - G) / (A N) - 1,   b = 2 (y - y0 - G) / N - 1.
+// unturned or turned by 180 degrees. With characteristic size N, a cell N_x = A N pixels wide
+// (A the cell aspect; a perspective view's own width) and guard G a cell is (N_x + 2G) x
+// (N + 2G) pixels. Image points are level-0 pixels: x right, y down, pixel (i, j) spans
+// [i, i+1) x [j, j+1). Inside a cell whose top-left pixel is (x0, y0):
+//   a = 2 (x - x0 - G) / N_x - 1,   b = 2 (y - y0 - G) / N - 1.
 #pragma once
 
 #include <cmath>
@@ -17,16 +18,16 @@ namespace envconv {
 // Tolerance of the validity test: rim directions land at R^2 = 1 + O(1e-16).
 constexpr double kOnEdge = 1e-9;
 
-// One layout instance: the Python side's geo = [family, N, G, aspect, columns, rows] plus the
-// tables cell -> face (-1: empty), cell -> half turns (0 or 2), face -> cell.
-struct Geometry {
-    int family;
-    int64_t n, guard, aspect, columns, rows;
+// One layout instance: the Python side's geo = [family, N, G, N_x, columns, rows, parameters]
+// (the chart: family and parameters) plus the tables cell -> face (-1: empty), cell -> half
+// turns (0 or 2), face -> cell.
+struct Geometry : Chart {
+    int64_t n, guard, nx, columns, rows;
     const int32_t* cell_face;
     const int32_t* cell_turns;
     const int32_t* face_cell;
 
-    int64_t cell_width() const { return aspect * n + 2 * guard; }
+    int64_t cell_width() const { return nx + 2 * guard; }
     int64_t cell_height() const { return n + 2 * guard; }
     bool disk() const { return is_disk(family); }
 };
@@ -46,7 +47,7 @@ struct ImagePoint {
 inline void cell_local(const Geometry& g, int64_t cell, double px, double py, double& a,
                        double& b) {
     int64_t col = cell % g.columns, row = cell / g.columns;
-    a = 2.0 * (px - double(col * g.cell_width() + g.guard)) / double(g.aspect * g.n) - 1.0;
+    a = 2.0 * (px - double(col * g.cell_width() + g.guard)) / double(g.nx) - 1.0;
     b = 2.0 * (py - double(row * g.cell_height() + g.guard)) / double(g.n) - 1.0;
     if (g.cell_turns[cell] == 2) {
         a = -a;
@@ -75,7 +76,7 @@ inline ImagePoint face_to_image(const Geometry& g, int face, double a, double b)
         b = -b;
     }
     int64_t col = cell % g.columns, row = cell / g.columns;
-    double px = double(col * g.cell_width() + g.guard) + 0.5 * (a + 1.0) * double(g.aspect * g.n);
+    double px = double(col * g.cell_width() + g.guard) + 0.5 * (a + 1.0) * double(g.nx);
     double py = double(row * g.cell_height() + g.guard) + 0.5 * (b + 1.0) * double(g.n);
     return {px, py, cell};
 }
@@ -100,7 +101,7 @@ inline bool point_readable(const Geometry& g, int face, double a, double b) {
 // Cell whose valid region is nearest to (px, py) in pixels; ties go to the lower face.
 inline int64_t nearest_cell(const Geometry& g, double px, double py) {
     double cw = double(g.cell_width()), ch = double(g.cell_height());
-    double n = double(g.n), an = double(g.aspect * g.n);
+    double n = double(g.n), an = double(g.nx);
     int64_t best_cell = -1;
     int best_face = 1 << 30;
     double best_d = 1e300;
@@ -156,11 +157,11 @@ struct Rotation {
     }
 };
 
-// Source image point and cell of output point (a, b) of `face` (output family `dfam`).
-inline ImagePoint source_point(const Geometry& src, int dfam, int face, double a, double b,
-                               const Rotation& rot) {
+// Source image point and cell of output point (a, b) of `face` (output chart `dfam`).
+inline ImagePoint source_point(const Geometry& src, const Chart& dfam, int face, double a,
+                               double b, const Rotation& rot) {
     Vec3 d = rot.apply(face_to_dir(dfam, face, a, b));
-    FacePoint s = dir_to_face(src.family, d.x, d.y, d.z);
+    FacePoint s = dir_to_face(src, d.x, d.y, d.z);
     return face_to_image(src, s.face, s.a, s.b);
 }
 

@@ -66,7 +66,7 @@ inline double centre_source_y(const Conversion& cv, int64_t i, int64_t j) {
         output_sample(cv.dst, (double(i) + 0.5) * cv.scale_x, (double(j) + 0.5) * cv.scale_y,
                       cv.fill);
     if (!s.readable) return 0.5 * double(cv.src.n);
-    return source_point(cv.src, cv.dst.family, s.face, s.a, s.b, cv.rot).y;
+    return source_point(cv.src, cv.dst, s.face, s.a, s.b, cv.rot).y;
 }
 
 // Source pixels per output pixel along (step_x, step_y), by a forward or backward difference of
@@ -81,7 +81,7 @@ inline double one_sided_span(const Conversion& cv, int face, double px, double p
         OutputSample q =
             output_sample(cv.dst, px + side * delta * step_x, py + side * delta * step_y, cv.fill);
         if (!q.readable || q.face != face) continue;
-        ImagePoint s = source_point(cv.src, cv.dst.family, face, q.a, q.b, cv.rot);
+        ImagePoint s = source_point(cv.src, cv.dst, face, q.a, q.b, cv.rot);
         if (s.cell != s0.cell) continue;
         double span = std::hypot(s.x - s0.x, s.y - s0.y) / delta;
         if (best < 0.0 || span < best) {
@@ -104,18 +104,18 @@ inline Footprint pixel_footprint(const Conversion& cv, int64_t i, int64_t j) {
     double px = (double(i) + 0.5) * cv.scale_x, py = (double(j) + 0.5) * cv.scale_y;
     OutputSample s = output_sample(cv.dst, px, py, cv.fill);
     if (!s.readable) return {-1.0, -1.0, -1.0, -1.0};
-    const int dfam = cv.dst.family;
+    const Chart& dfam = cv.dst;
     ImagePoint s0 = source_point(cv.src, dfam, s.face, s.a, s.b, cv.rot);
     Footprint f;
     f.span_x = one_sided_span(cv, s.face, px, py, cv.scale_x, 0.0, s0, f.x_of_x);
     f.span_y = one_sided_span(cv, s.face, px, py, 0.0, cv.scale_y, s0, f.x_of_y);
     if (f.span_x >= 0.0 && f.span_y >= 0.0) return f;
     const Geometry &d = cv.dst, &src = cv.src;
-    double d_area = (2.0 * cv.scale_x / double(d.aspect * d.n)) * (2.0 * cv.scale_y / double(d.n));
-    double s_area = (2.0 / double(src.aspect * src.n)) * (2.0 / double(src.n));
+    double d_area = (2.0 * cv.scale_x / double(d.nx)) * (2.0 * cv.scale_y / double(d.n));
+    double s_area = (2.0 / double(src.nx)) * (2.0 / double(src.n));
     Vec3 v = cv.rot.apply(face_to_dir(dfam, s.face, s.a, s.b));
-    FacePoint sf = dir_to_face(src.family, v.x, v.y, v.z);
-    double omega_in = density(src.family, sf.face, sf.a, sf.b) * s_area;
+    FacePoint sf = dir_to_face(src, v.x, v.y, v.z);
+    double omega_in = density(src, sf.face, sf.a, sf.b) * s_area;
     double omega_out = density(dfam, s.face, s.a, s.b) * d_area;
     if (omega_in <= omega_out * 1e-6) return {1e3, 1e3, -1.0, -1.0};  // angular's rim
     double ratio = std::sqrt(omega_out / omega_in);

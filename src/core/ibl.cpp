@@ -287,10 +287,10 @@ struct Bins {
 inline bool owned_point(const Geometry& g, double px, double py, Vec3& d, double& dens) {
     Located at = locate(g, px, py);
     if (!point_valid(g, at.face, at.a, at.b)) return false;
-    d = face_to_dir(g.family, at.face, at.a, at.b);
-    FacePoint back = dir_to_face(g.family, d.x, d.y, d.z);
+    d = face_to_dir(g, at.face, at.a, at.b);
+    FacePoint back = dir_to_face(g, d.x, d.y, d.z);
     if (face_to_image(g, back.face, back.a, back.b).cell != at.cell) return false;
-    dens = density(g.family, at.face, at.a, at.b);
+    dens = density(g, at.face, at.a, at.b);
     return true;
 }
 
@@ -345,7 +345,7 @@ bool build_pyramid_binned_any(const float* image, int64_t height, int64_t width,
                               const Geometry& g, const Rotation& to_pyramid, int64_t p, int sub,
                               double delta, float* out, int threads) {
     Bins bins(p, nch, height);
-    const double area = (2.0 / double(g.aspect * g.n)) * (2.0 / double(g.n));
+    const double area = (2.0 / double(g.nx)) * (2.0 / double(g.n));
     parallel_for(bins.bands, threads, [&](int64_t band) {
         double* acc = bins.band(band);
         for (int64_t j = band * height / bins.bands; j < (band + 1) * height / bins.bands; ++j) {
@@ -379,7 +379,7 @@ void sh_project(const float* image, int64_t height, int64_t width, int64_t chann
                 const Geometry& g, int samples, double sign_x, double* out, int threads) {
     const int64_t terms = 9 * channels;
     std::vector<double> rows(height * terms, 0.0);
-    const double area = (2.0 / double(g.aspect * g.n)) * (2.0 / double(g.n));
+    const double area = (2.0 / double(g.nx)) * (2.0 / double(g.n));
     const double c0 = 0.28209479177387814, c1 = 0.4886025119029199, c2 = 1.0925484305920792,
                  c3 = 0.31539156525252005, c4 = 0.5462742152960396;
     parallel_for(height, threads, [&](int64_t j) {

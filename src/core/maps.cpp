@@ -21,7 +21,7 @@ void map_points_to_dirs(const Geometry& g, const double* points, int64_t count, 
         for (int64_t k = task * kPointsPerTask; k < end; ++k) {
             OutputSample s = output_sample(g, points[2 * k], points[2 * k + 1], fill);
             Vec3 d{0.0, 0.0, 0.0};
-            if (s.readable) d = face_to_dir(g.family, s.face, s.a, s.b);
+            if (s.readable) d = face_to_dir(g, s.face, s.a, s.b);
             dirs[3 * k] = d.x;
             dirs[3 * k + 1] = d.y;
             dirs[3 * k + 2] = d.z;
@@ -36,7 +36,7 @@ void map_dirs_to_points(const Geometry& g, const double* dirs, int64_t count, do
     parallel_for(tasks, threads, [&](int64_t task) {
         int64_t end = std::min(count, (task + 1) * kPointsPerTask);
         for (int64_t k = task * kPointsPerTask; k < end; ++k) {
-            FacePoint f = dir_to_face(g.family, dirs[3 * k], dirs[3 * k + 1], dirs[3 * k + 2]);
+            FacePoint f = dir_to_face(g, dirs[3 * k], dirs[3 * k + 1], dirs[3 * k + 2]);
             ImagePoint p = face_to_image(g, f.face, f.a, f.b);
             points[2 * k] = p.x;
             points[2 * k + 1] = p.y;
@@ -47,7 +47,7 @@ void map_dirs_to_points(const Geometry& g, const double* dirs, int64_t count, do
 void pixel_solid_angles(const Geometry& g, double scale_x, double scale_y, int samples,
                         double* out, int64_t height, int64_t width, int threads) {
     // Area of one sub-sample in (a, b) units.
-    double sub_area = (2.0 * scale_x / double(g.aspect * g.n)) * (2.0 * scale_y / double(g.n)) /
+    double sub_area = (2.0 * scale_x / double(g.nx)) * (2.0 * scale_y / double(g.n)) /
                       double(samples * samples);
     parallel_for(height, threads, [&](int64_t j) {
         for (int64_t i = 0; i < width; ++i) {
@@ -58,7 +58,7 @@ void pixel_solid_angles(const Geometry& g, double scale_x, double scale_y, int s
                     double px = (double(i) + (sx + 0.5) / samples) * scale_x;
                     Located at = locate(g, px, py);
                     if (point_valid(g, at.face, at.a, at.b))
-                        total += density(g.family, at.face, at.a, at.b) * sub_area;
+                        total += density(g, at.face, at.a, at.b) * sub_area;
                 }
             }
             out[j * width + i] = total;
@@ -68,8 +68,8 @@ void pixel_solid_angles(const Geometry& g, double scale_x, double scale_y, int s
 
 void dir_density(const Geometry& g, const double* dirs, int64_t count, double* out) {
     for (int64_t k = 0; k < count; ++k) {
-        FacePoint f = dir_to_face(g.family, dirs[3 * k], dirs[3 * k + 1], dirs[3 * k + 2]);
-        out[k] = density(g.family, f.face, f.a, f.b);
+        FacePoint f = dir_to_face(g, dirs[3 * k], dirs[3 * k + 1], dirs[3 * k + 2]);
+        out[k] = density(g, f.face, f.a, f.b);
     }
 }
 

@@ -2,12 +2,15 @@
 //
 // Each function takes C-contiguous numpy arrays of the stated dtypes (envconv/resample/kernels.py makes
 // them so, allocates the outputs and carries the docstrings), releases the GIL and runs on
-// `threads` threads. A layout instance arrives as four arrays: geo = [family, N, G, aspect,
-// columns, rows] (int64) and the int32 tables cell -> face, cell -> half turns, face -> cell.
+// `threads` threads. A layout instance arrives as four arrays: geo = [family, N, G, N_x,
+// columns, rows, then the chart's kParamCount parameters] (float64; N_x is a cell's width
+// without guard, A N for a cell of aspect A) and the int32 tables cell -> face, cell -> half
+// turns, face -> cell.
 #include <nanobind/nanobind.h>
 #include <nanobind/ndarray.h>
 
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -25,20 +28,34 @@ namespace {
 template <typename T, typename... Extra>
 using Array = nb::ndarray<T, nb::numpy, nb::c_contig, nb::device::cpu, Extra...>;
 
-using GeoArray = Array<const int64_t, nb::shape<6>>;
+using GeoArray = Array<const double, nb::shape<6 + envconv::kParamCount>>;
+using ParamArray = Array<const double, nb::shape<envconv::kParamCount>>;
 using TableArray = Array<const int32_t, nb::ndim<1>>;
+
+envconv::Chart make_chart(int family, const ParamArray& params) {
+    if (family < 0 || family >= envconv::kFamilyCount) throw std::invalid_argument("bad family");
+    envconv::Chart c;
+    c.family = family;
+    for (int k = 0; k < envconv::kParamCount; ++k) c.param[k] = params(k);
+    return c;
+}
 
 envconv::Geometry make_geometry(const GeoArray& geo, const TableArray& cell_face,
                                 const TableArray& cell_turns, const TableArray& face_cell) {
     envconv::Geometry g;
+    for (int k = 0; k < 6; ++k) {  // whole numbers, well inside int64 (NaN fails too)
+        if (!(std::fabs(geo(k)) < 9.0e15 && geo(k) == std::floor(geo(k))))
+            throw std::invalid_argument("invalid layout geometry");
+    }
     g.family = int(geo(0));
-    g.n = geo(1);
-    g.guard = geo(2);
-    g.aspect = geo(3);
-    g.columns = geo(4);
-    g.rows = geo(5);
+    g.n = int64_t(geo(1));
+    g.guard = int64_t(geo(2));
+    g.nx = int64_t(geo(3));
+    g.columns = int64_t(geo(4));
+    g.rows = int64_t(geo(5));
+    for (int k = 0; k < envconv::kParamCount; ++k) g.param[k] = geo(6 + k);
     if (g.family < 0 || g.family >= envconv::kFamilyCount || g.n < 1 || g.guard < 0 ||
-        g.aspect < 1 || g.columns < 1 || g.rows < 1)
+        g.nx < 1 || g.columns < 1 || g.rows < 1)
         throw std::invalid_argument("invalid layout geometry");
     if (int64_t(cell_face.shape(0)) != g.columns * g.rows ||
         int64_t(cell_turns.shape(0)) != g.columns * g.rows || face_cell.shape(0) < 1)
@@ -174,47 +191,47 @@ void dir_density(GeoArray geo, TableArray cell_face, TableArray cell_turns, Tabl
 }
 
 // Per-family maps on flat arrays, for the layout modules and the tests.
-void face_to_dir(int family, Array<const int32_t, nb::ndim<1>> face,
+void face_to_dir(int family, ParamArray params, Array<const int32_t, nb::ndim<1>> face,
                  Array<const double, nb::ndim<1>> a, Array<const double, nb::ndim<1>> b,
                  Array<double, nb::shape<-1, 3>> out) {
-    if (family < 0 || family >= envconv::kFamilyCount) throw std::invalid_argument("bad family");
+    envconv::Chart chart = make_chart(family, params);
     size_t n = a.shape(0);
     if (face.shape(0) != n || b.shape(0) != n || out.shape(0) != n)
         throw std::invalid_argument("face, a, b and out differ in length");
     nb::gil_scoped_release release;
     for (size_t k = 0; k < n; ++k) {
-        envconv::Vec3 d = envconv::face_to_dir(family, face(k), a(k), b(k));
+        envconv::Vec3 d = envconv::face_to_dir(chart, face(k), a(k), b(k));
         out(k, 0) = d.x;
         out(k, 1) = d.y;
         out(k, 2) = d.z;
     }
 }
 
-void dir_to_face(int family, Array<const double, nb::shape<-1, 3>> dirs,
+void dir_to_face(int family, ParamArray params, Array<const double, nb::shape<-1, 3>> dirs,
                  Array<int32_t, nb::ndim<1>> face, Array<double, nb::ndim<1>> a,
                  Array<double, nb::ndim<1>> b) {
-    if (family < 0 || family >= envconv::kFamilyCount) throw std::invalid_argument("bad family");
+    envconv::Chart chart = make_chart(family, params);
     size_t n = dirs.shape(0);
     if (face.shape(0) != n || a.shape(0) != n || b.shape(0) != n)
         throw std::invalid_argument("dirs, face, a and b differ in length");
     nb::gil_scoped_release release;
     for (size_t k = 0; k < n; ++k) {
-        envconv::FacePoint f = envconv::dir_to_face(family, dirs(k, 0), dirs(k, 1), dirs(k, 2));
+        envconv::FacePoint f = envconv::dir_to_face(chart, dirs(k, 0), dirs(k, 1), dirs(k, 2));
         face(k) = f.face;
         a(k) = f.a;
         b(k) = f.b;
     }
 }
 
-void density(int family, Array<const int32_t, nb::ndim<1>> face,
+void density(int family, ParamArray params, Array<const int32_t, nb::ndim<1>> face,
              Array<const double, nb::ndim<1>> a, Array<const double, nb::ndim<1>> b,
              Array<double, nb::ndim<1>> out) {
-    if (family < 0 || family >= envconv::kFamilyCount) throw std::invalid_argument("bad family");
+    envconv::Chart chart = make_chart(family, params);
     size_t n = a.shape(0);
     if (face.shape(0) != n || b.shape(0) != n || out.shape(0) != n)
         throw std::invalid_argument("face, a, b and out differ in length");
     nb::gil_scoped_release release;
-    for (size_t k = 0; k < n; ++k) out(k) = envconv::density(family, face(k), a(k), b(k));
+    for (size_t k = 0; k < n; ++k) out(k) = envconv::density(chart, face(k), a(k), b(k));
 }
 
 // Test hooks: one filtered read of a source image, and one read of a rip-map level.
@@ -350,9 +367,9 @@ NB_MODULE(_core, m) {
           "face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "out"_a, "threads"_a);
     m.def("dir_density", &dir_density, "geo"_a, "cell_face"_a, "cell_turns"_a, "face_cell"_a,
           "dirs"_a, "out"_a);
-    m.def("face_to_dir", &face_to_dir, "family"_a, "face"_a, "a"_a, "b"_a, "out"_a);
-    m.def("dir_to_face", &dir_to_face, "family"_a, "dirs"_a, "face"_a, "a"_a, "b"_a);
-    m.def("density", &density, "family"_a, "face"_a, "a"_a, "b"_a, "out"_a);
+    m.def("face_to_dir", &face_to_dir, "family"_a, "params"_a, "face"_a, "a"_a, "b"_a, "out"_a);
+    m.def("dir_to_face", &dir_to_face, "family"_a, "params"_a, "dirs"_a, "face"_a, "a"_a, "b"_a);
+    m.def("density", &density, "family"_a, "params"_a, "face"_a, "a"_a, "b"_a, "out"_a);
     m.def("filtered_reads", &filtered_reads, "src"_a, "geo"_a, "cell_face"_a, "cell_turns"_a,
           "face_cell"_a, "cells"_a, "points"_a, "filter"_a, "out"_a);
     m.def("level_reads", &level_reads, "rip"_a, "start"_a, "level_width"_a, "points"_a, "out"_a);
@@ -389,8 +406,12 @@ NB_MODULE(_core, m) {
     m.attr("FAMILY_TENNISBALL") = int(envconv::kTennisball);
     m.attr("FAMILY_OCTAHEDRAL") = int(envconv::kOctahedral);
     m.attr("FAMILY_EQUAL_AREA") = int(envconv::kEqualArea);
+    m.attr("FAMILY_EAC") = int(envconv::kEac);
+    m.attr("FAMILY_FISHEYE") = int(envconv::kFisheye);
+    m.attr("FAMILY_PERSPECTIVE") = int(envconv::kPerspective);
     nb::list disks;
     for (int family = 0; family < envconv::kFamilyCount; ++family)
         if (envconv::is_disk(family)) disks.append(family);
     m.attr("DISK_FAMILIES") = nb::steal<nb::tuple>(PyList_AsTuple(disks.ptr()));
+    m.attr("PARAM_COUNT") = envconv::kParamCount;
 }

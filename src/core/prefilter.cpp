@@ -381,7 +381,7 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
     const Lobe lobe(std::max(alpha, 1e-4));
     const double kink_tol =
         (alpha > 0.1 ? kKinkToleranceBroad : kKinkToleranceNarrow) * lobe.integral();
-    const double sub_area = (2.0 * scale_x / double(dst.aspect * dst.n)) *
+    const double sub_area = (2.0 * scale_x / double(dst.nx)) *
                             (2.0 * scale_y / double(dst.n)) / double(samples * samples);
     const int64_t span = std::max(1, kTileSamples / samples);  // pixels per tile side
     const int64_t tiles_x = (width + span - 1) / span, tiles_y = (height + span - 1) / span;
@@ -402,8 +402,8 @@ void prefilter(const Pyramid& pyr, const Geometry& dst, double scale_x, double s
                 OutputSample s = output_sample(dst, px, py, fill);
                 if (!s.readable) continue;
                 int k = y * gw + x;
-                walk.weight[k] = density(dst.family, s.face, s.a, s.b) * sub_area;
-                Vec3 n = rot.apply(face_to_dir(dst.family, s.face, s.a, s.b));
+                walk.weight[k] = density(dst, s.face, s.a, s.b) * sub_area;
+                Vec3 n = rot.apply(face_to_dir(dst, s.face, s.a, s.b));
                 walk.nx[k] = n.x;
                 walk.ny[k] = n.y;
                 walk.nz[k] = n.z;

@@ -55,7 +55,7 @@ void store(const ResampleOutput& out, int64_t j, int64_t i, const double* acc, d
 double exact_pixel(const Job& job, int64_t i, int64_t j, int nx, int ny, int level,
                    Scratch& scratch, int& nvalid) {
     const Conversion& cv = job.cv;
-    const int dfam = cv.dst.family;
+    const Chart& dfam = cv.dst;
     int64_t start = rip_offset(job.s_width, level);
     int64_t level_width = job.s_width >> level;
     double x_scale = 1.0 / double(1 << level);
@@ -405,7 +405,7 @@ void resample_band(const Job& job, int64_t band, Scratch& scratch) {
                 cell_local(d, cell, x0, y0, a00, b00);
                 cell_local(d, cell, x1, y0, a10, b10);
                 cell_local(d, cell, x0, y1, a01, b01);
-                c00 = map_tile(cv.src, d.family, face, cv.rot, a00, b00, a10 - a00, b10 - b00,
+                c00 = map_tile(cv.src, d, face, cv.rot, a00, b00, a10 - a00, b10 - b00,
                                a01 - a00, b01 - b00, grid);
             }
             if (c00 >= 0) {
@@ -435,7 +435,7 @@ void resample(const Image& src, const RipMap& rip, const Conversion& cv, int sam
     bool adaptive = samples <= 0;
     bool fast_taps = filter == kBilinear && !cv.src.disk();
     // Tiles small enough against an output cell (level-0 pixels) for the checks to hold.
-    double dn = double(d.n), dan = double(d.aspect * d.n);
+    double dn = double(d.n), dan = double(d.nx);
     bool may_tile = (kTile / 2) * cv.scale_x * kMinTilesPerCell <= dan &&
                     (kTile / 2) * cv.scale_y * kMinTilesPerCell <= dn && samples <= kMaxRowSamples;
     int largest_tile = kTile / 2;
@@ -446,7 +446,7 @@ void resample(const Image& src, const RipMap& rip, const Conversion& cv, int sam
     int min_subtile = samples == 1 ? 4 : kMinSubtile;
     Job job{src, rip, cv, out, samples, filter, adaptive, fast_taps, may_tile,
             (adaptive && fast_taps) ? rip.levels : 0, largest_tile, min_subtile,
-            cv.src.aspect * cv.src.n};
+            cv.src.nx};
     int64_t bands = (out.height + kTile - 1) / kTile;
     parallel_for(bands, threads, [&](int64_t band) {
         Scratch scratch(out.channels);

@@ -47,12 +47,12 @@ inline void remap_tap(const Geometry& g, int64_t cell, int64_t ix, int64_t iy, i
                       int64_t& jy) {
     double a, b;
     cell_local(g, cell, double(ix) + 0.5, double(iy) + 0.5, a, b);
-    Vec3 d = face_to_dir(g.family, g.cell_face[cell], a, b);
-    FacePoint f = dir_to_face(g.family, d.x, d.y, d.z);
+    Vec3 d = face_to_dir(g, g.cell_face[cell], a, b);
+    FacePoint f = dir_to_face(g, d.x, d.y, d.z);
     ImagePoint p = face_to_image(g, f.face, f.a, f.b);
     int64_t x0 = (p.cell % g.columns) * g.cell_width() + g.guard;
     int64_t y0 = (p.cell / g.columns) * g.cell_height() + g.guard;
-    jx = std::min(std::max(floor_index(p.x), x0), x0 + g.aspect * g.n - 1);
+    jx = std::min(std::max(floor_index(p.x), x0), x0 + g.nx - 1);
     jy = std::min(std::max(floor_index(p.y), y0), y0 + g.n - 1);
 }
 

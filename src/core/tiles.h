@@ -63,7 +63,7 @@ using TileGrid = double[3][3][3];
 // Map the tile's 3 x 3 grid (a(fx, fy) = a00 + da_x fx + da_y fy, likewise b) and check the
 // quarter points. Returns the source cell when interpolation is within tolerance and the whole
 // grid lies in that cell, else -1.
-inline int64_t map_tile(const Geometry& src, int dfam, int face, const Rotation& rot, double a00,
+inline int64_t map_tile(const Geometry& src, const Chart& dfam, int face, const Rotation& rot, double a00,
                         double b00, double da_x, double db_x, double da_y, double db_y,
                         TileGrid& grid) {
     int64_t cell0 = -1;
