@@ -75,6 +75,7 @@ def test_info_reports_an_untagged_square_as_unknown_until_from(tmp_path):
         "angular",
         "octahedral",
         "equal-area",
+        "fisheye",
     ]
     assert "sphere, angular" in record["reason"] and "--from" in record["reason"]
     assert (record["width"], record["height"], record["size"], record["mean_radiance"]) == (

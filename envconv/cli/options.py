@@ -67,6 +67,16 @@ def parse_samples(ctx, param, value):
     return _checked(check_samples, value)
 
 
+def parse_size(ctx, param, value):
+    """``--size N`` (an int) or ``--size WxH`` (a perspective view's; kept as text)."""
+    if value is None:
+        return None
+    from ..resample.options import check_size
+
+    n, width = _checked(check_size, value)
+    return n if width is None else f"{width}x{n}"
+
+
 def parse_guard(ctx, param, value):
     if value is None:
         return 0
@@ -110,7 +120,7 @@ READ = [
 
 RESAMPLE = [
     ("to", click.option("--to", "to", required=True, type=layout_choice(), help="Output layout.")),
-    ("size", click.option("--size", type=click.IntRange(min=1), help="Output N: face edge, lat-long height, disk diameter (docs/geometry.md, 'Sizes'). Default: the N that keeps the input's pixel pitch along the horizon (a 2048x1024 lat-long gives cube faces of 559, a lat-long of 1024); with --mips, N+2G is then rounded to the nearest power of two (--mips K: multiple of 2^(K-1)), so that every level holds whole cells (559 becomes 512).")),
+    ("size", click.option("--size", callback=parse_size, metavar="N|WxH", help="Output N: face edge, lat-long height, disk diameter (docs/geometry.md, 'Sizes'); a perspective view's height, or its WxH. Default: the N that keeps the input's pixel pitch along the horizon (a 2048x1024 lat-long gives cube faces of 559, a lat-long of 1024; a view: the pitch at its axis); with --mips, N+2G is then rounded to the nearest power of two (--mips K: multiple of 2^(K-1)), so that every level holds whole cells (559 becomes 512).")),
     ("samples", click.option("--samples", default="auto", callback=parse_samples, show_default=True, help="Sub-samples per pixel edge S (S×S per pixel), or 'auto': per pixel, about two per source texel its edge spans.")),
     ("filter", click.option("--filter", "filter", type=click.Choice(list(FILTERS)), default="bilinear", show_default=True, help="Reconstruction filter for source reads.")),
     ("rotate", click.option("--rotate", metavar="YAW,PITCH,ROLL", help="Rotate the environment, degrees: about +Y, then +X, then +Z (right-hand rule).")),
@@ -123,6 +133,10 @@ RESAMPLE = [
     ("mips", click.option("--mips", is_flag=False, flag_value="all", default=None, callback=parse_mips, metavar="[K|ggx[:K]]", help="Write a mip chain: alone, every level down to 1x1; --mips K, K levels; --mips ggx, GGX-prefiltered levels for image-based lighting. EXR/TIFF/DDS/KTX2: one file; other formats: {level} in the path.")),
     ("roughness", click.option("--roughness", default="gltf", show_default=True, metavar="gltf|filament|unreal|R1,R2,..", help="Roughness of each --mips ggx level: glTF-IBL-Sampler's k/(L-1), Filament's or Unreal's mapping, or a list for levels 1.. (see docs/ibl.md).")),
     ("irradiance", click.option("--irradiance", is_flag=True, help="Write the cosine-convolved environment E/pi (diffuse image-based lighting) instead of the environment.")),
+    ("fov", click.option("--fov", metavar="DEG|H,V", help="Field of view of a fisheye (its diameter; default 180, as ffmpeg) or perspective output (horizontal, or H,V; default 90).")),
+    ("yaw", click.option("--yaw", type=float, metavar="DEG", help="Aim a fisheye or perspective output: turn the view right by DEG (as ffmpeg v360's yaw).")),
+    ("pitch", click.option("--pitch", type=float, metavar="DEG", help="Aim a fisheye or perspective output: raise the view by DEG (after --yaw).")),
+    ("roll", click.option("--roll", type=float, metavar="DEG", help="Bank a fisheye or perspective view right by DEG (after --pitch); the picture turns counter-clockwise.")),
 ]  # fmt: skip
 
 WRITE = [

@@ -38,7 +38,7 @@ from ..color.prepare import FIX_MODES
 from ..errors import EnvconvError, UsageError
 from ..layouts import get_layout
 from ..resample.convert import FILTERS, convert
-from ..resample.options import check_guard, check_mips, check_samples
+from ..resample.options import check_guard, check_mips, check_samples, check_size
 from .pipeline import Colorspace, Exposure, Pipeline, Read, Resample, Rotate, Step, Write
 from .steps import PREPARE_OPTIONS, check_variables
 
@@ -313,7 +313,11 @@ CHECKS: dict[str, Any] = {
     "path": _text, "preview": _text, "dst": _text, "src": _text, "config": _text,
     "ocio_config": _text, "input_colorspace": _text, "output_colorspace": _text,
     "axes": _text, "to": _layout, "layout": _layout,
-    "size": lambda v: None if _is_int(v) and v >= 1 else "a positive integer",
+    "size": lambda v: None if (_is_int(v) and v >= 1) or (isinstance(v, (str, list)) and
+                               _passes(check_size, v)) else "a positive integer, or 'WxH'",
+    "fov": lambda v: None if _is_number(v) or isinstance(v, str) or (
+        isinstance(v, list) and len(v) == 2 and all(_is_number(x) for x in v)) else
+    "degrees: a number, 'H,V' or [H, V]",
     "level": lambda v: None if _is_int(v) and v >= 0 else "a non-negative integer",
     "part": lambda v: None if (_is_int(v) and v >= 0) or (isinstance(v, str) and v) else
     "a part name or index",

@@ -23,6 +23,7 @@ from .. import io
 from ..errors import EnvconvError, ImageIOError, UsageError
 from ..layouts import get_layout
 from .checks import check_colorspace_name, check_conventions, check_levels, working_space
+from ..layouts.base import VIEW_OPTIONS
 from .steps import (
     _IO_PLACEHOLDERS,
     VARIABLES,
@@ -222,8 +223,11 @@ class Walk:
             step.params["to"], step.convert_kwargs(self.rotation), step.params["mips"]
         )
 
-    def _make_output(self, to: str, kwargs: dict[str, Any], mips: Any) -> None:
-        layout = get_layout(to)
+    def _make_output(self, to, kwargs: dict[str, Any], mips: Any) -> None:
+        from ..resample.options import check_output, output_layout
+
+        view = {k: kwargs.get(k) for k in VIEW_OPTIONS}
+        layout = check_output(to, kwargs.get("size"), **view)
         record, env = None, None
         if self.mode != "run" and "to" in kwargs:
             check_conventions({**kwargs, "mips": mips}, getattr(self.source, "layout", None))
@@ -235,15 +239,14 @@ class Walk:
 
                 start = time.perf_counter()
                 env = convert(self.source, **kwargs)
-                size, channels = env.size, env.channels
+                layout, size, channels = env.layout, env.size, env.channels
             else:
-                from ..resample.convert import default_size
                 from ..resample.options import output_channels
 
-                size = kwargs.get("size") or default_size(
-                    SimpleNamespace(size=self.source.size, layout=self.source.layout), layout,
-                    kwargs.get("out_convention"), mips=mips, guard=kwargs.get("guard", 0),
-                )  # fmt: skip
+                source = SimpleNamespace(size=self.source.size, layout=self.source.layout)
+                layout, size = output_layout(source, to, kwargs.get("size"), **view,
+                                             out_convention=kwargs.get("out_convention"),
+                                             mips=mips, guard=kwargs.get("guard", 0))  # fmt: skip
                 channels = output_channels(self.source.channels, kwargs.get("alpha", False))
             width, height = layout.file_size(size, guard)
             record = Output(self.input, layout.name, int(size), guard, width, height,
@@ -264,12 +267,12 @@ class Walk:
                              "rotate")  # fmt: skip
         if latest is None:
             if self.rotation is not None:
-                layout = None if self.mode == "check" else self.source.layout.name
+                layout = None if self.mode == "check" else self.source.layout
                 kwargs = {} if self.mode == "check" else {
                     "to": layout, "size": self.source.size, "guard": self.source.guard,
                     "rotate": self.rotation}  # fmt: skip
                 self._make_output(layout or "latlong", kwargs, None)
-                self.latest.layout = layout
+                self.latest.layout = None if layout is None else layout.name
             else:
                 self._write_source()
         if self.mode != "check":

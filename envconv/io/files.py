@@ -334,7 +334,7 @@ def _first_line(message: str) -> str:
     return message.splitlines()[0] if message else "unknown error"
 
 
-_DESCRIPTION_TAG = re.compile(r"\s*envconv:(layout|size|guard|face|level|grid)=(\S+)")
+_DESCRIPTION_TAG = re.compile(r"\s*envconv:(layout|size|guard|face|level|grid|view)=(\S+)")
 
 
 def _tags_from_description(metadata: dict[str, Any]) -> dict[str, Any]:

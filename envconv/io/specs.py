@@ -14,6 +14,7 @@ import numpy as np
 
 from ..envmap import EnvMap, alpha_channel
 from ..layouts.grids import CENTRES, tagged_grid
+from ..layouts.view import VIEW_TAG, view_text
 from .exr_header import PLACEHOLDER
 from .files import _oiio
 from .formats import choose_pixel_type, format_of
@@ -72,10 +73,15 @@ def level_image(target, pixels, envmap: EnvMap, face, bit_depth, compression, le
     nch = pixels.shape[2]
     alpha = alpha_channel(channels[:nch])
     attributes: list[tuple[str, Any]] = []
-    if alpha is not None and fmt in ("png", "tiff"):
-        # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG) or
+    if alpha is not None and fmt in ("png", "tiff", "targa"):
+        # Store alpha unassociated: OIIO would otherwise divide colour by it (PNG, Targa) or
         # mark it premultiplied (TIFF). envconv's alpha is a validity mask.
         attributes.append(("oiio:UnassociatedAlpha", 1))
+    if fmt == "targa":
+        # Uncompressed (type 2) and stored bottom-up, the Targa default: Quake II's loader
+        # reads rows bottom-up whatever the header says, and reads no other image types
+        # than 2 and 10; OIIO writes RLE top-down.
+        attributes.append(("compression", "none"))
     attributes.extend(envmap.metadata.items())
     attributes.extend(_envconv_tags(envmap, fmt, face))
     if compression is not None:
@@ -117,12 +123,15 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
 
     tags: list[tuple[str, Any]] = []
     grid = tagged_grid(envmap.metadata)
+    view = view_text(envmap.layout.view_options) if envmap.layout.view else None
     if fmt in _DESCRIPTION_FORMATS:
         words = {"layout": envmap.layout.name, "size": envmap.size, "guard": envmap.guard}
         if face is not None:
             words["face"] = face
         if grid != CENTRES:
             words["grid"] = grid
+        if view is not None:
+            words["view"] = view.replace(" ", ";")
         text = " ".join(f"envconv:{k}={v}" for k, v in words.items())
         kept = str(envmap.metadata.get("ImageDescription", "")).strip()
         tags.append(("ImageDescription", f"{kept} {text}".strip()))
@@ -136,6 +145,8 @@ def _envconv_tags(envmap: EnvMap, fmt: str, face: str | None) -> list[tuple[str,
     ]
     if face is not None:
         tags.append(("envconv:face", face))
+    if view is not None:
+        tags.append((VIEW_TAG, view))
     stamp = _source_date()
     if stamp is not None and "DateTime" not in envmap.metadata:
         tags.append(("DateTime", stamp))

@@ -16,6 +16,7 @@ import numpy as np
 
 from ..envmap import EnvMap
 from ..errors import ImageIOError
+from ..layouts.view import VIEW_TAG, view_text
 from .chatter import library_output
 from .exr_header import PLACEHOLDER, store_sampleborder
 from .files import _first_line, _oiio
@@ -132,6 +133,8 @@ def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarra
     check_write(envmap.layout, path, guard=envmap.guard)
     images, cube = texture_images(envmap.layout, levels, envmap.alpha_index)
     extra = {"envconv:layout": envmap.layout.name}
+    if envmap.layout.view:
+        extra[VIEW_TAG] = view_text(envmap.layout.view_options)
     if "envconv:roughness" in envmap.metadata:
         extra["envconv:roughness"] = str(envmap.metadata["envconv:roughness"])
     data = encode_texture(fmt, images, cube, envmap.alpha_index is None,

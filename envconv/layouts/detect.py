@@ -3,11 +3,13 @@
 Order: the ``envconv:layout`` tag (with ``envconv:guard``), then OpenEXR's ``envmap`` attribute
 (``latlong`` → latlong, ``cube`` → cube-exr; OpenImageIO reports it as ``textureformat``
 "LatLong Environment" or "CubeFace Environment"), then the aspect ratio. Aspects that only one
-layout has are guessed: 3:4 cube-vcross, 4:3 cube-hcross, 6:1 cube-hstrip, 3:2 tennisball.
+layout has are guessed: 3:4 cube-vcross, 4:3 cube-hcross, 6:1 cube-hstrip.
 Shared aspects are refused with a message naming the candidates, except 2:1: a 2:1 image is a
 lat-long unless it is black outside two inscribed disks, which is what an untagged packed
-paraboloid looks like; then it is ambiguous too. 1:1 (sphere, angular, octahedral or
-equal-area) and 1:6 (cube-vstrip or cube-exr) always need ``--from``. No pixel test tells the
+paraboloid looks like; then it is ambiguous too. 1:1 (sphere, angular, octahedral, equal-area
+or fisheye), 1:6 (cube-vstrip or cube-exr) and 3:2 (tennisball or eac, the equi-angular cube
+of YouTube and ffmpeg) always need ``--from``; a perspective view, whose aspect is its own, is
+known only by its tag or ``--from``. No pixel test tells the
 square layouts apart: the two octahedral squares fill every pixel with the same kind of sky, and
 pbrt-v4's ``imgtool makeequiarea`` writes no attribute that names its layout, so a pbrt file
 is read with ``--from equal-area --in-convention pbrt``.
@@ -24,8 +26,9 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
-from ..errors import LayoutError
+from ..errors import LayoutError, UsageError
 from . import LAYOUTS, Layout, get_layout
+from .view import VIEW_TAG, parse_view_text
 
 __all__ = ["find_layout", "place_image", "misfit_message", "tagged_guard", "Found"]
 
@@ -33,12 +36,16 @@ _UNIQUE_ASPECTS = {
     (3, 4): "cube-vcross",
     (4, 3): "cube-hcross",
     (6, 1): "cube-hstrip",
-    (3, 2): "tennisball",
 }
 _SHARED_ASPECTS = {
-    (1, 1): ("sphere", "angular", "octahedral", "equal-area"),
+    (1, 1): ("sphere", "angular", "octahedral", "equal-area", "fisheye"),
     (1, 6): ("cube-vstrip", "cube-exr"),
+    (3, 2): ("tennisball", "eac"),
 }
+
+
+#: Layouts whose aspect is their own (a perspective view's W × H): never guessed from it.
+_OWN_ASPECT = ("perspective",)
 
 
 class Found(NamedTuple):
@@ -97,7 +104,7 @@ def _aspect_list() -> str:
     """'2:1 latlong or paraboloid, 3:4 cube-vcross, …' for every single-file layout."""
     by_aspect: dict[str, list[str]] = {}
     for layout in LAYOUTS.values():
-        if not layout.multi_file:
+        if not layout.multi_file and layout.name not in _OWN_ASPECT:
             w, h = layout.image_size(1, 0)
             by_aspect.setdefault(f"{w // math.gcd(w, h)}:{h // math.gcd(w, h)}", []).append(
                 layout.name
@@ -173,6 +180,26 @@ def misfit_message(
             f"crop or resize it, or pass --from with the layout it is in ({aspect})")  # fmt: skip
 
 
+def _aim(layout: Layout, metadata: dict[str, Any], width: int, height: int, guard: int) -> Layout:
+    """An aimed layout (fisheye, perspective) with the view its file records (``envconv:view``,
+    when the file is tagged as this layout; else the layout's defaults) and, for a
+    perspective view, the image's own aspect."""
+    options: dict[str, Any] = {}
+    if metadata.get("envconv:layout") == layout.name and VIEW_TAG in metadata:
+        try:
+            options = parse_view_text(metadata[VIEW_TAG])
+            layout = layout.configure(**options)
+        except UsageError as exc:
+            raise LayoutError(f"the file's {exc}; pass --from with another layout") from None
+    cw, ch = width // layout.columns - 2 * guard, height // layout.rows - 2 * guard
+    if cw >= 1 and ch >= 1 and layout.content_width(ch) != cw:
+        try:
+            layout = layout.configure(fov=options.get("fov"), width=cw, height=ch)
+        except UsageError:  # a size the layout cannot take: size_from_image says why
+            pass
+    return layout
+
+
 def place_image(
     width: int,
     height: int,
@@ -197,6 +224,8 @@ def place_image(
         guard = tagged_guard(metadata) if metadata.get("envconv:layout") == found.name else 0
         origin = "given by --from"
     guard >>= level + int(metadata.get("envconv:level", 0) or 0)  # a level's guard is G >> k
+    if found.configurer is not None:
+        found = _aim(found, metadata, width, height, guard)
     try:
         size = found.size_from_image(width, height, guard)
     except LayoutError:

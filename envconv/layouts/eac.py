@@ -29,8 +29,8 @@ same lat-long file. ffmpeg also pads every row with 2 fixed pixels (left and rig
 above and below it): its (3N + 4) × (2N + 8) image with those pixels cut out is envconv's.
 
 Valid region: every pixel of the six cells. Solid angle per unit (a', b') area:
-(π/4)² (1 + a²)(1 + b²) / (1 + a² + b²)^{3/2}, within 23% of its mean everywhere (the plain
-cube's varies by a factor of 5). Continued mapping (guard rings, filter taps): past |a'| = 1
+(π/4)² (1 + a²)(1 + b²) / (1 + a² + b²)^{3/2}, from 0.83 (mid-edge) to 1.18 (centre) times its
+mean π/6 (the plain cube's varies by a factor of 5). Continued mapping (guard rings, filter taps): past |a'| = 1
 the face's plane goes on at the edge's rate, a = ±(1 + π/2 (|a'| − 1)), which continues the
 map smoothly (C1) to any distance.
 """

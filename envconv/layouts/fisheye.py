@@ -15,9 +15,9 @@
 
 With X = 2u - 1, Y = 1 - 2v, R = |(X, Y)| and h = fov/2 in radians: θ = h R from the view
 axis, view direction (-sin θ · X/R, sin θ · Y/R, cos θ), then the view frame C of
-:mod:`envconv.layouts.view` (yaw turns the view right, pitch up, roll about the axis; the
-same picture as ``--rotate YAW,PITCH,ROLL`` of an unturned view). Inverse: with v = Cᵀ d,
-θ = atan2(|(v_x, v_y)|, v_z), R = θ / h, (X, Y) = R · (-v_x, v_y) / |(v_x, v_y)|.
+:mod:`envconv.layouts.view` (an aircraft's yaw, pitch and roll, as ffmpeg's: the view turns
+right, rises, banks right). Inverse: with v = Cᵀ d, θ = atan2(|(v_x, v_y)|, v_z), R = θ / h,
+(X, Y) = R · (-v_x, v_y) / |(v_x, v_y)|.
 
 This is ffmpeg v360's ``fisheye`` output (``fisheye_to_xyz`` with ``h_fov = v_fov = fov`` on a
 square frame; its default fov is 180 too) with its "front" at the lat-long's centre: ffmpeg

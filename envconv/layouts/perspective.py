@@ -13,21 +13,20 @@
 
 With a = 2u - 1, b = 2v - 1, t_x = tan(fov_h / 2) and t_y = tan(fov_v / 2): view direction
 normalise(-a t_x, -b t_y, 1), then the view frame C of :mod:`envconv.layouts.view` (yaw turns
-the view right, pitch up, roll about the axis; the same picture as ``--rotate YAW,PITCH,ROLL``
-of an unturned view). Inverse: with v = Cᵀ d in front of the camera (v_z > 0),
-(a, b) = (-v_x / (v_z t_x), -v_y / (v_z t_y)).
+the view right, pitch raises it, roll banks it right, as an aircraft's and as ffmpeg's).
+Inverse: with v = Cᵀ d in front of the camera (v_z > 0), (a, b) = (-v_x, -v_y) / (v_z t).
 
 Options (:meth:`Layout.configure`, ``--fov H[,V] --yaw --pitch --roll``, ``--size W×H``): the
 fields of view in degrees, each in (0, 180); default 90 across. With one angle the vertical
 one follows from the image's aspect (square pixels); with two and no W×H the aspect follows
 from them. ``N`` (``--size N``) is the height. Recorded in the file's ``envconv:view``.
 
-py360convert's ``e2p(e, fov_deg, u_deg, v_deg, out_hw, in_rot_deg)`` makes the same view with
-two differences of convention: its field of view spans the outermost pixel *centres* (it puts
-``linspace(-tan, tan, W)`` on them), envconv's the image's edges, so envconv's fov_h equals
-``2 atan(W/(W-1) · tan(fov_deg/2))``; and its ``u_deg``, ``v_deg`` are envconv's yaw and
-pitch (in_rot_deg turns the picture the other way from roll). Its lat-long is envconv's: the
-centre +Z, pixel centres at ((i + 0.5)/W, (j + 0.5)/H).
+py360convert's ``e2p(e, fov_deg, u_deg, v_deg, out_hw, in_rot_deg)`` makes the same view from
+the same lat-long (its centre is the view's +Z, its pixel centres at ((i + 0.5)/W, (j + 0.5)/H)
+as envconv's), and its ``u_deg``, ``v_deg``, ``in_rot_deg`` are envconv's yaw, pitch and roll.
+One convention differs: its field of view spans the outermost pixel *centres* (it puts
+``linspace(-tan, tan, W)`` on them), envconv's the image's edges, so py360convert's fov_deg
+F is envconv's ``2 atan(W/(W-1) · tan(F/2))`` across W pixels (likewise down H).
 
 Valid region: the whole W × H cell. A perspective view covers part of the sphere
 (``partial``): read as a source, the directions outside its frustum are holes. Solid angle per

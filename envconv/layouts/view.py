@@ -2,14 +2,18 @@
 
 A view looks from the centre along its axis. With yaw, pitch and roll all 0 the axis is +Z (the
 lat-long's centre), +Y is up and image right is −X: the picture is unmirrored, as the
-lat-long's centre is seen from inside. ``yaw`` turns the view to the right (towards −X),
-``pitch`` up (towards +Y) and ``roll`` turns the picture about the axis; all in degrees. The
-view of an environment with (yaw, pitch, roll) is exactly the unturned view of that
-environment rotated by ``--rotate YAW,PITCH,ROLL`` (:mod:`envconv.layouts.rotation`): its frame
-is C = Rᵀ with R = Rz(roll) · Rx(pitch) · Ry(yaw), world direction = C · view direction.
+lat-long's centre is seen from inside. The angles are an aircraft's, in degrees, applied in
+that order, each about the view's own axes: ``yaw`` turns the view to the right (towards −X),
+``pitch`` raises it (towards +Y), ``roll`` banks it to the right (clockwise as one looks along
+it, so the picture turns counter-clockwise). ffmpeg v360's ``yaw``, ``pitch`` and ``roll`` are
+the same (checked against ffmpeg in tests/test_fisheye.py). The view of an environment with
+(yaw, pitch, roll) is the unturned view of that environment rotated by ``--rotate
+YAW,PITCH,-ROLL`` (:mod:`envconv.layouts.rotation`): its frame is C = Rᵀ with
+R = Rz(−roll) · Rx(pitch) · Ry(yaw), world direction = C · view direction.
 
 A file records the view in one ``envconv:view`` attribute, e.g. ``fov=90,73.7398 yaw=30
-pitch=-10 roll=0`` (degrees), so that it reads back as it was written.
+pitch=-10 roll=0`` (degrees), so that it reads back as it was written (in an ImageDescription,
+where words are separated by spaces, as ``envconv:view=fov=90;yaw=30;pitch=-10;roll=0``).
 """
 
 from __future__ import annotations
@@ -28,7 +32,7 @@ VIEW_TAG = "envconv:view"
 
 def frame(yaw: float, pitch: float, roll: float) -> tuple[float, ...]:
     """The view frame C = Rᵀ (module docstring), row-major: 9 floats."""
-    return tuple(float(x) for x in rotation_matrix(yaw, pitch, roll).T.ravel())
+    return tuple(float(x) for x in rotation_matrix(yaw, pitch, -roll).T.ravel())
 
 
 def angle(name: str, value: Any) -> float:
@@ -72,7 +76,7 @@ def parse_view_text(text: Any) -> dict[str, Any]:
     """The options of an ``envconv:view`` value (:func:`view_text`); UsageError when it is not
     one (a file's tag that cannot be read is named, not guessed)."""
     options: dict[str, Any] = {}
-    for word in str(text).split():
+    for word in str(text).replace(";", " ").split():
         key, eq, value = word.partition("=")
         if not eq or key not in ("fov", "yaw", "pitch", "roll") or key in options:
             raise UsageError(f"{VIEW_TAG} {text!r} is not fov=H[,V] yaw=Y pitch=P roll=R")

@@ -140,8 +140,9 @@ def convert(
     fov, yaw, pitch, roll : optional
         The view of an aimed output layout (fisheye, perspective; see
         :mod:`envconv.layouts.view`): ``fov`` in degrees (a fisheye's diameter, 180 by default;
-        a perspective view's horizontal angle or ``"H,V"``, 90 by default), ``yaw`` turns the
-        view right, ``pitch`` up, ``roll`` about its axis. Other layouts refuse them.
+        a perspective view's horizontal angle or ``"H,V"``, 90 by default); ``yaw`` turns the
+        view right, ``pitch`` raises it, ``roll`` banks it right (an aircraft's angles, as
+        ffmpeg v360's). Other layouts refuse them.
 
     Returns
     -------

@@ -19,7 +19,8 @@ from ..layouts.conventions import resolve_convention
 from ..layouts.geometry import horizon_pitch
 
 __all__ = ["FILTERS", "MAX_SAMPLES", "default_size", "auto_samples", "check_samples", "check_guard",
-           "check_mips", "check_conventions", "output_channels", "check_size", "output_layout"]  # fmt: skip
+           "check_mips", "check_conventions", "output_channels", "check_size", "check_output",
+           "output_layout"]  # fmt: skip
 
 #: Reconstruction filters by name → kernel code.
 FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
@@ -83,6 +84,19 @@ def check_size(size) -> tuple[int | None, int | None]:
     )
 
 
+def check_output(to: Layout | str, size=None, fov=None, yaw=None, pitch=None,
+                 roll=None) -> Layout:  # fmt: skip
+    """``to`` configured with the view options and a W × H ``size`` (see :func:`output_layout`),
+    for checking them before any source is read; UsageError for one the layout does not take."""
+    to = get_layout(to)
+    n, width = check_size(size)
+    if width is not None and to.configurer is None:
+        raise UsageError(f"{to.name} takes --size N, not {width}x{n}; W x H is a perspective "
+                         "view's size")  # fmt: skip
+    view = {"fov": fov, "yaw": yaw, "pitch": pitch, "roll": roll}
+    return to.configure(**view, width=width, height=n if width is not None else None)
+
+
 def output_layout(source: EnvMap, to: Layout | str, size=None, fov=None, yaw=None, pitch=None,
                   roll=None, out_convention=None, mips=None,
                   guard=0) -> tuple[Layout, int]:  # fmt: skip
@@ -92,12 +106,9 @@ def output_layout(source: EnvMap, to: Layout | str, size=None, fov=None, yaw=Non
     A W × H ``size`` is a perspective view's own (N is its height); a view's width otherwise
     follows from its aspect. UsageError for an option the layout does not take."""
     to = get_layout(to)
-    n, width = check_size(size)
-    if width is not None and to.configurer is None:
-        raise UsageError(f"{to.name} takes --size N, not {width}x{n}; W x H is a perspective "
-                         "view's size")  # fmt: skip
     view = {"fov": fov, "yaw": yaw, "pitch": pitch, "roll": roll}
-    layout = to.configure(**view, width=width, height=n if width is not None else None)
+    layout = check_output(to, size, **view)
+    n, width = check_size(size)
     if n is None:
         n = default_size(source, layout, out_convention, mips=mips, guard=guard)
     if layout.configurer is not None and width is None:
