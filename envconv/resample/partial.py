@@ -5,9 +5,10 @@ The resampling kernel maps every direction into its source. A partial layout's
 ``dir_to_face`` sends a direction it does not cover past its valid region, no further than its
 *reach* (:meth:`envconv.layouts.base.Layout.kernel_params`): the middle of a ring of
 :data:`~envconv.layouts.base.PARTIAL_PAD` pixels that :func:`pad_partial` adds around every
-cell, as a guard ring. The padded map's ``valid`` is 1 where the source covers (the cell's
-valid region: a fisheye's disk, a perspective view's rectangle, less any hole the file already
-had) and 0 elsewhere: its own guard ring, a fisheye's corners past the rim, the pad. The holes
+cell, as a guard ring. The padded map's ``valid`` is the part of each pixel the source covers
+(the cell's valid region: a fisheye's disk, a perspective view's rectangle, less any hole the
+file already had): 1 inside, the covered fraction across a fisheye's rim, 0 elsewhere (its own
+guard ring, a fisheye's corners, the pad), and the pixels hold colour × valid. The holes
 machinery (:mod:`envconv.resample.holes`) then resamples ``valid`` with the colour: a pixel
 wholly outside the view is 0 with coverage 0, a pixel across the view's edge is the mean of its
 covered samples, and ``alpha=True`` gives the covered part of each pixel.
@@ -25,22 +26,49 @@ from ..layouts.base import PARTIAL_PAD
 __all__ = ["pad_partial", "covered_mask"]
 
 
+#: Sub-samples per side that measure how much of a pixel across a disk's rim it covers.
+RIM_SAMPLES = 8
+
+
 def covered_mask(layout, n: int, guard: int) -> np.ndarray:
-    """(H, W) float32: 1 at the pixels of a ``layout`` image (size ``n``, guard ``guard``) whose
-    centres lie in a cell's valid region, 0 elsewhere."""
+    """(H, W) float32: the part of each pixel of a ``layout`` image (size ``n``, guard
+    ``guard``) inside its cell's valid region: 1 or 0, and for a pixel across a disk's rim the
+    fraction of RIM_SAMPLES² sub-samples inside."""
     width, height = layout.image_size(n, guard)
     cw, ch = layout.cell_size(n, guard)
     nx = layout.content_width(n)
     mask = np.zeros((height, width), np.float32)
-    x = (np.arange(cw) + 0.5 - guard) * (2.0 / nx) - 1.0
-    y = (np.arange(ch) + 0.5 - guard) * (2.0 / n) - 1.0
     if layout.disk:
-        inside = (x[None, :] ** 2 + y[:, None] ** 2) <= 1.0
+        inside = _disk_cover(cw, ch, n, guard)
     else:
+        x = (np.arange(cw) + 0.5 - guard) * (2.0 / nx) - 1.0
+        y = (np.arange(ch) + 0.5 - guard) * (2.0 / n) - 1.0
         inside = (np.abs(x[None, :]) <= 1.0) & (np.abs(y[:, None]) <= 1.0)
     for cell in layout.cells:
         mask[cell.row * ch : (cell.row + 1) * ch, cell.col * cw : (cell.col + 1) * cw] = inside
     return mask
+
+
+def _disk_cover(cw: int, ch: int, n: int, guard: int) -> np.ndarray:
+    """(ch, cw) float32: the part of each pixel of a disk cell (diameter n, guard ring guard)
+    inside the disk; sub-sampled only for the pixels the rim crosses."""
+    scale = 2.0 / n
+    x0 = (np.arange(cw) - guard) * scale - 1.0  # each pixel's left edge, in (a, b)
+    y0 = (np.arange(ch) - guard) * scale - 1.0
+    # The nearest and farthest points of each pixel from the centre.
+    near_x = np.maximum(0.0, np.maximum(x0, -(x0 + scale)))
+    near_y = np.maximum(0.0, np.maximum(y0, -(y0 + scale)))
+    far_x = np.maximum(np.abs(x0), np.abs(x0 + scale))
+    far_y = np.maximum(np.abs(y0), np.abs(y0 + scale))
+    near = near_x[None, :] ** 2 + near_y[:, None] ** 2
+    far = far_x[None, :] ** 2 + far_y[:, None] ** 2
+    cover = (far <= 1.0).astype(np.float32)
+    rim = np.nonzero((near < 1.0) & (far > 1.0))
+    t = (np.arange(RIM_SAMPLES) + 0.5) / RIM_SAMPLES * scale
+    sx = x0[rim[1]][:, None, None] + t[None, None, :]
+    sy = y0[rim[0]][:, None, None] + t[None, :, None]
+    cover[rim] = np.mean(sx * sx + sy * sy <= 1.0, axis=(1, 2))
+    return cover
 
 
 def pad_partial(envmap: EnvMap) -> EnvMap:
