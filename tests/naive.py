@@ -189,11 +189,20 @@ def _from_ffmpeg(x, y, z):
     return _normalise(-x, -y, z)
 
 
+def _eac_plane(e):
+    """The cube-plane coordinate of an equi-angular one: tan(π/4 · e) on the face; past its
+    edge (a guard ring) the plane goes on at the edge's rate, 1 + π/2 (|e| − 1) (ffmpeg's own
+    padding goes on at rate 1 instead; envconv's docs/conventions.md states this rule)."""
+    e = np.asarray(e, np.float64)
+    past = np.sign(e) * (1 + 0.5 * math.pi * (np.abs(e) - 1))
+    return np.where(np.abs(e) <= 1, np.tan(0.25 * math.pi * np.clip(e, -1, 1)), past)
+
+
 def _eac(face, ea, eb):
     """ffmpeg 5.1 vf_v360.c ``eac_to_xyz`` without its padding: uf, vf = tan(π/2 · e/2), then
     the six cells' vectors as the switch writes them (TOP_LEFT … BOTTOM_RIGHT)."""
-    uf = np.tan(0.25 * math.pi * ea)
-    vf = np.tan(0.25 * math.pi * eb)
+    uf = _eac_plane(ea)
+    vf = _eac_plane(eb)
     one = np.ones_like(uf)
     table = [
         (-one, vf, uf),  # TOP_LEFT

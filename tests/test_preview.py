@@ -10,7 +10,7 @@ from click.testing import CliRunner
 import envconv
 import envconv.layouts.geometry
 from envconv.cli.main import cli
-from envconv.layouts import LAYOUTS
+from envconv.layouts import LAYOUTS, get_layout
 from envconv.views.pattern import LABELS, pattern, render_pattern
 from envconv.views.preview import (
     MID_GREY,
@@ -88,10 +88,16 @@ def test_views_from_every_layout(layout):
     guard = 2 if layout.startswith("cube") and layout != "cube-exr" else 0
     # N giving the horizon at least the working lat-long's resolution (a 90° view ≈ 128 px)
     size = {"latlong": 256, "equal-area": 256, "sphere": 512, "angular": 512,
-            "paraboloid": 256, "paraboloid-split": 256, "octahedral": 512}.get(layout, 128)  # fmt: skip
-    errors = label_errors(render_pattern(layout, size, samples=2, guard=guard))
+            "paraboloid": 256, "paraboloid-split": 256, "octahedral": 512,
+            "fisheye": 512}.get(layout, 128)  # fmt: skip
+    aimed = get_layout(layout)
+    if layout == "fisheye":  # its 360° view sees the whole sphere
+        aimed = aimed.configure(fov=360)
+    errors = label_errors(render_pattern(aimed, size, samples=2, guard=guard))
     if layout == "sphere":  # its rim is one direction, −Z: the −Z view is a smear by design
         errors.pop("-Z")
+    if layout == "perspective":  # its default 90° view sees one label, +Z's
+        errors = {"+Z": errors["+Z"]}
     assert max(errors.values()) < LABEL_LIMIT, errors
 
 

@@ -150,8 +150,19 @@ def starfield():
     # Analytic solid angle of a texel of row r: (2π / W) (sin lat_top − sin lat_bottom).
     lat_top = math.pi * (0.5 - rows / height)
     lat_bottom = math.pi * (0.5 - (rows + 1) / height)
-    energy = 1e4 * (2 * math.pi / (2 * height)) * (np.sin(lat_top) - np.sin(lat_bottom)).sum()
-    return envconv.EnvMap(pixels, "latlong"), energy
+    omega = 1e4 * (2 * math.pi / (2 * height)) * (np.sin(lat_top) - np.sin(lat_bottom))
+    # A partial layout's default view sees the part of each highlight inside it: the bilinear
+    # reconstruction spreads a texel over a tent two texels wide, weighted by cos(latitude).
+    t = (np.arange(64) + 0.5) / 32 - 1.0  # -1 … 1 texels from the texel's centre
+    tent = 1.0 - np.abs(t)
+    u = (np.array([c for _, c in texels])[:, None, None] + 0.5 + t[None, None, :]) / (2 * height)
+    v = (rows[:, None, None] + 0.5 + t[None, :, None]) / height
+    u, v = np.broadcast_arrays(u, v)
+    dirs = naive.face_to_dir("latlong", 0, 2 * u - 1, 2 * v - 1)
+    weight = tent[None, :, None] * tent[None, None, :] * np.abs(np.cos(np.pi * (0.5 - v)))
+    seen = {name: (omega * (np.where(test(dirs), weight, 0).sum((1, 2)) / weight.sum((1, 2))))
+            .sum() for name, test in naive.PARTIAL.items()}  # fmt: skip
+    return envconv.EnvMap(pixels, "latlong"), {"whole": omega.sum(), **seen}
 
 
 def _energy(envmap):
@@ -162,14 +173,25 @@ def _energy(envmap):
 @pytest.mark.parametrize("name", SPIKE_LAYOUTS)
 @pytest.mark.parametrize("reduction", [4, 8])
 def test_highlights_keep_their_energy_in_a_reduction(name, reduction, starfield):
-    source, energy = starfield
+    source, energies = starfield
+    energy = energies.get(name, energies["whole"])  # a partial view: what it sees
     size = default_size(source, name) // reduction
-    assert _energy(envconv.convert(source, name, size=size)) == pytest.approx(energy, rel=0.01)
+    # Each highlight's energy depends on where its sub-samples fall, a noise that averages out
+    # over the highlights: 1% over the whole sphere's 300, wider over the fewer a view sees
+    # (perspective's 90° sees about 40: 2.8%). The equi-angular cube's pixels are all alike, so
+    # it does not average out over sizes as a cube's does (1.02% at reduction 4). With 32 × 32
+    # sub-samples both converge (below: the noise is sampling, not geometry).
+    rel = 0.01 * math.sqrt(energies["whole"] / energy) * (1.5 if name == "eac" else 1.0)
+    assert _energy(envconv.convert(source, name, size=size)) == pytest.approx(energy, rel=rel)
+    if rel > 0.01 and reduction == 8 - 4 * (name == "eac"):
+        dense = envconv.convert(source, name, size=size, samples=32)
+        assert _energy(dense) == pytest.approx(energy, rel=0.003)
 
 
 def test_single_tap_loses_highlight_energy(starfield):
     """The same reduction with one sample per pixel misses or doubles highlights."""
-    source, energy = starfield
+    source, energies = starfield
+    energy = energies["whole"]
     errors = [
         abs(
             _energy(envconv.convert(source, n, size=default_size(source, n) // 4, samples=1))
