@@ -21,6 +21,9 @@ FORMATS = {
     ".png": ("png", ("uint8", "uint16"), "uint8", 4),
     ".jpg": ("jpeg", ("uint8",), "uint8", 3),
     ".jpeg": ("jpeg", ("uint8",), "uint8", 3),
+    # Targa, as game skyboxes use it (Quake II/III, GoldSrc, Source): 8-bit RGB or RGBA,
+    # uncompressed, rows stored bottom-up (origin bit clear), which every loader reads upright.
+    ".tga": ("targa", ("uint8",), "uint8", 4),
 }
 
 
