@@ -98,3 +98,15 @@ def test_command_line_writes_and_reads_eac(tmp_path):
     assert refused.exit_code == 2
     assert len(stderr_lines(refused)) == 1 and "--fov" in refused.stderr
     assert not (tmp_path / "x.exr").exists()
+
+
+def test_ffmpeg_preset_on_both_sides_changes_nothing(source):
+    """ffmpeg's e and eac share its frame, so --in-convention ffmpeg with --out-convention
+    ffmpeg is the picture without either (what ffmpeg itself makes); one alone turns it."""
+    _, sky = source
+    plain = envconv.convert(sky, to="eac", size=8, samples=1).pixels
+    both = envconv.convert(sky, to="eac", size=8, samples=1, in_convention="ffmpeg",
+                           out_convention="ffmpeg").pixels  # fmt: skip
+    one = envconv.convert(sky, to="eac", size=8, samples=1, in_convention="ffmpeg").pixels
+    np.testing.assert_allclose(both, plain, atol=1e-6)
+    assert np.abs(one - plain).max() > 0.1

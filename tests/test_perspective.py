@@ -4,7 +4,8 @@
   py360convert itself where it is installed) of the same lat-long is envconv's, for any field
   of view, yaw, pitch and roll, once its fields of view (outermost pixel centres) are given as
   envconv's (image edges); the comparison tells it from a half-pixel shift, a mirrored or a
-  turned picture, and from py360convert's fov taken as envconv's.
+  turned picture, and from py360convert's fov taken as envconv's. ffmpeg v360's ``flat`` is
+  the same view too (tests/ffmpeg_peer.py).
 - The field of view spans the image edge to edge; straight lines stay straight.
 - As a source it covers its frustum only: the rest of the sphere is a hole.
 - W x H, --fov H[,V], --yaw, --pitch and --roll flow through the command line; a bad value exits
@@ -19,7 +20,7 @@ import numpy as np
 import py360_port
 import pytest
 from conftest import run_cli, stderr_lines
-from ffmpeg_peer import discriminates, pattern, rms
+from ffmpeg_peer import discriminates, pattern, pattern_latlong, rms, v360
 
 import envconv
 from envconv.layouts import get_layout
@@ -70,6 +71,22 @@ def test_perspective_is_py360converts_view(sky, fov, yaw, pitch, roll):
     }
     near, _ = discriminates(out.pixels, peer, wrong, factor=20)
     assert near < 2e-5
+
+
+@pytest.mark.parametrize("fov, yaw, pitch, roll", VIEWS[:2])
+def test_perspective_is_ffmpegs_flat_view(tmp_path, fov, yaw, pitch, roll):
+    """ffmpeg v360's ``flat`` is the same pinhole view, its fields of view edge to edge as
+    envconv's, its angles envconv's."""
+    path, sky16 = pattern_latlong(tmp_path)
+    peer = v360(path, tmp_path / "flat.png", f"e:flat:w={W}:h={H}:h_fov={fov[0]}:v_fov={fov[1]}"
+                f":yaw={yaw}:pitch={pitch}:roll={roll}")  # fmt: skip
+    out = envconv.convert(sky16, to="perspective", size=f"{W}x{H}", fov=f"{fov[0]},{fov[1]}",
+                          yaw=yaw, pitch=pitch, roll=roll, samples=1)  # fmt: skip
+    truth = _pattern_at(out.layout)
+    wrong = {"half a pixel to the right": _pattern_at(out.layout, du=0.5),
+             "mirrored": truth[:, ::-1], "turned half a turn": truth[::-1, ::-1]}  # fmt: skip
+    near, _ = discriminates(out.pixels, peer, wrong)
+    assert near < 1e-3
 
 
 @pytest.mark.parametrize("fov, yaw, pitch, roll", VIEWS)

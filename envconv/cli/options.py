@@ -27,6 +27,8 @@ __all__ = [
     "write_options",
     "color_options",
     "split_options",
+    "view_options",
+    "parse_size",
     "READ",
     "RESAMPLE",
     "WRITE",
@@ -169,6 +171,8 @@ def _apply(group):
 
 read_options = _apply(READ)
 resample_options = _apply(RESAMPLE)
+#: --fov, --yaw, --pitch, --roll alone (for commands that draw rather than resample).
+view_options = _apply([entry for entry in RESAMPLE if entry[0] in ("fov", "yaw", "pitch", "roll")])
 write_options = _apply(WRITE)
 color_options = _apply(COLOR)
 

@@ -5,7 +5,14 @@ from __future__ import annotations
 import click
 
 from .main import cli
-from .options import layout_choice, parse_guard, split_options, write_options
+from .options import (
+    layout_choice,
+    parse_guard,
+    parse_size,
+    split_options,
+    view_options,
+    write_options,
+)
 
 __all__ = ["pattern_command"]
 
@@ -15,10 +22,11 @@ __all__ = ["pattern_command"]
 @click.option("--to", "to", required=True, type=layout_choice(), help="Layout to draw.")
 @click.option(
     "--size",
-    type=click.IntRange(min=1),
-    default=256,
+    default="256",
+    callback=parse_size,
     show_default=True,
-    help="N: face edge, lat-long height, disk diameter.",
+    metavar="N|WxH",
+    help="N: face edge, lat-long height, disk diameter (a perspective view's height, or WxH).",
 )
 @click.option(
     "--samples",
@@ -41,8 +49,10 @@ __all__ = ["pattern_command"]
     help="Guard ring of G pixels, or 'fill'.",
 )
 @click.option("--alpha", is_flag=True, help="Add an alpha channel: valid-region coverage.")
+@view_options
 @write_options
-def pattern_command(output_path, to, size, samples, convention, guard, alpha, **options):
+def pattern_command(output_path, to, size, samples, convention, guard, alpha, fov, yaw, pitch,
+                    roll, **options):  # fmt: skip
     """Write a labelled test pattern in layout --to to OUTPUT.
 
     The pattern marks +X -X +Y -Y +Z -Z with upright, unmirrored labels (as a camera at the
@@ -55,15 +65,18 @@ def pattern_command(output_path, to, size, samples, convention, guard, alpha, **
       envconv pattern grid.exr --to latlong --size 512
       envconv pattern sky_{face}.png --to cube-faces --size 256 --out-convention unity
       envconv pattern sky_{face}.tga --to cube-faces --out-convention quake
+      envconv pattern view.png --to perspective --size 640x480 --fov 100 --yaw 45
     """
     from .. import io
     from ..engine.api import route_face_sets
+    from ..resample.options import output_layout
     from ..views.pattern import render_pattern
 
     _, _, write_kw = split_options(options)
     resample_kw = {"to": to, "out_convention": convention}
     route_face_sets(output_path, {}, resample_kw, write_kw)
     io.output_paths(to, output_path, faces=write_kw.get("faces"))
-    envmap = render_pattern(to, size, samples, resample_kw.get("out_convention"), guard, alpha)
+    layout, n = output_layout(None, to, size, fov, yaw, pitch, roll)  # size is never None here
+    envmap = render_pattern(layout, n, samples, resample_kw.get("out_convention"), guard, alpha)
     for path in io.write(envmap, output_path, **write_kw):
         click.echo(path)

@@ -49,7 +49,11 @@ preset             layouts                           M (as AXES)            note
 ``threejs``        cube-vcross/hcross/hstrip/vstrip, ``x,y,z``              CubeTexture px … nz,
                    cube-faces                                               ``flipEnvMap`` −1
 ``ffmpeg``         latlong (``e``), cube-hstrip      ``-x,y,-z``            default ``rludfb``, no
-                   (``c6x1``), cube-vstrip (``c1x6``)                       face rotation
+                   (``c6x1``), cube-vstrip (``c1x6``),                      face rotation; eac and
+                   eac, fisheye                                             fisheye look at its
+                                                                            front as envconv's at
+                                                                            +Z: no preset needed
+                                                                            with its own ``e``
 ``ffmpeg``         sphere (``ball``)                 ``x,y,-z``             mirror image (s = +1)
 ``probe-back``     sphere, angular                   ``x,y,z``              GL_SPHERE_MAP, Debevec,
                                                                             OIIO, Blender, USD
@@ -242,11 +246,14 @@ _PRESET_LIST = (
     ),
     Preset(
         "ffmpeg",
-        "ffmpeg v360 (x right, y down, z front): e, c6x1, c1x6 (rludfb, no rotation), ball",
+        "ffmpeg v360 (x right, y down, z front): e, c6x1, c1x6 (rludfb, no rotation), eac, "
+        "fisheye, ball",
         {
             "latlong": "-x,y,-z",
             "cube-hstrip": "-x,y,-z",
             "cube-vstrip": "-x,y,-z",
+            "eac": "-x,y,-z",
+            "fisheye": "-x,y,-z",
             "sphere": "x,y,-z",
         },
         frame="x,-y,-z",

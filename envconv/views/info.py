@@ -80,6 +80,7 @@ def describe(path: str, layout: str | None = None, level: int = 0, part: str | N
         "reason": found.reason,
         "size": found.size,
         "guard": found.guard,
+        "view": _view(found.layout),
         "width": found.width,
         "height": found.height,
         "display_window": list(header.display),
@@ -97,6 +98,13 @@ def describe(path: str, layout: str | None = None, level: int = 0, part: str | N
     if stats:
         record.update(_stats(path, found, layout, level, part))
     return record
+
+
+def _view(layout) -> dict[str, Any] | None:
+    """An aimed layout's view (fov, yaw, pitch, roll in degrees), else None."""
+    if layout is None or not layout.view:
+        return None
+    return {k: list(v) if isinstance(v, tuple) else v for k, v in layout.view_options.items()}
 
 
 def _stats(path: str, found, layout: str | None, level: int, part: str | None) -> dict[str, Any]:
