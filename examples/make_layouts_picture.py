@@ -26,6 +26,7 @@ ROWS = [
     ["cube-vcross", "cube-hcross", "cube-exr"],
     ["cube-hstrip"],
     ["sphere", "angular", "paraboloid", "octahedral", "equal-area"],
+    ["eac", "fisheye", "perspective"],
 ]
 
 
