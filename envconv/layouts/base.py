@@ -23,7 +23,6 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from fractions import Fraction
 from typing import Any
 
 import numpy as np
@@ -106,9 +105,9 @@ class Layout:
         One line for ``envconv layouts``.
     columns, rows : int
         Grid of cells, in cells.
-    aspect : int or Fraction
+    aspect : int or float
         Cell width in units of N (the cell height is always N): 2 for lat-long, 3 for
-        tennisball; a perspective view's width : height.
+        tennisball; a perspective view's width / height.
     cells : tuple of Cell
         Occupied cells; grid cells not listed hold no face and are invalid.
     face_names : tuple of str
@@ -133,7 +132,7 @@ class Layout:
     description: str
     columns: int
     rows: int
-    aspect: int | Fraction
+    aspect: int | float
     cells: tuple[Cell, ...]
     face_names: tuple[str, ...]
     multi_file: bool = False

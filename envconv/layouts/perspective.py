@@ -26,7 +26,8 @@ the same lat-long (its centre is the view's +Z, its pixel centres at ((i + 0.5)/
 as envconv's), and its ``u_deg``, ``v_deg``, ``in_rot_deg`` are envconv's yaw, pitch and roll.
 One convention differs: its field of view spans the outermost pixel *centres* (it puts
 ``linspace(-tan, tan, W)`` on them), envconv's the image's edges, so py360convert's fov_deg
-F is envconv's ``2 atan(W/(W-1) · tan(F/2))`` across W pixels (likewise down H).
+F is envconv's ``2 atan(W/(W-1) · tan(F/2))`` across W pixels (likewise down H). ffmpeg v360's
+``flat`` (``h_fov``, ``v_fov``, ``yaw``, ``pitch``, ``roll``) is envconv's view as it stands.
 
 Valid region: the whole W × H cell. A perspective view covers part of the sphere
 (``partial``): read as a source, the directions outside its frustum are holes. Solid angle per
@@ -38,7 +39,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from fractions import Fraction
 from typing import Any
 
 from .base import FAMILY_PERSPECTIVE, Cell, Layout
@@ -77,10 +77,9 @@ def configure(
         h, v = fields_of_view(fov, 180.0, pair=True)
         view["fov"] = h if v is None else (h, v)
         if v is not None and width is None:
-            ratio = math.tan(math.radians(h) / 2.0) / math.tan(math.radians(v) / 2.0)
-            aspect = Fraction(ratio).limit_denominator(1 << 20)
+            aspect = math.tan(math.radians(h) / 2.0) / math.tan(math.radians(v) / 2.0)
     if width is not None and height is not None:
-        aspect = Fraction(int(width), int(height))
+        aspect = int(width) / int(height)  # round(aspect * height) is width again
     for name, value in (("yaw", yaw), ("pitch", pitch), ("roll", roll)):
         if value is not None:
             view[name] = angle(name, value)
