@@ -243,7 +243,7 @@ def test_cli_convert_to_pbrt_and_back(tmp_path, smooth_latlong):
 
 
 def test_untagged_square_needs_from(tmp_path):
-    with pytest.raises(LayoutError, match="sphere, angular, octahedral or equal-area"):
+    with pytest.raises(LayoutError, match="sphere, angular, octahedral, equal-area or fisheye"):
         detect_layout(64, 64, {})
     path = tmp_path / "pbrt.exr"
     write_plain(path, np.ones((32, 32, 3)))

@@ -73,11 +73,16 @@ def test_perspective_is_py360converts_view(sky, fov, yaw, pitch, roll):
     assert near < 2e-5
 
 
+@pytest.fixture(scope="module")
+def sky_png(tmp_path_factory):
+    return pattern_latlong(tmp_path_factory.mktemp("flat"))
+
+
 @pytest.mark.parametrize("fov, yaw, pitch, roll", VIEWS[:2])
-def test_perspective_is_ffmpegs_flat_view(tmp_path, fov, yaw, pitch, roll):
+def test_perspective_is_ffmpegs_flat_view(tmp_path, sky_png, fov, yaw, pitch, roll):
     """ffmpeg v360's ``flat`` is the same pinhole view, its fields of view edge to edge as
     envconv's, its angles envconv's."""
-    path, sky16 = pattern_latlong(tmp_path)
+    path, sky16 = sky_png
     peer = v360(path, tmp_path / "flat.png", f"e:flat:w={W}:h={H}:h_fov={fov[0]}:v_fov={fov[1]}"
                 f":yaw={yaw}:pitch={pitch}:roll={roll}")  # fmt: skip
     out = envconv.convert(sky16, to="perspective", size=f"{W}x{H}", fov=f"{fov[0]},{fov[1]}",
