@@ -22,8 +22,8 @@ from typing import Any
 from .. import io
 from ..errors import EnvconvError, ImageIOError, UsageError
 from ..layouts import get_layout
-from .checks import check_colorspace_name, check_conventions, check_levels, working_space
 from ..layouts.base import VIEW_OPTIONS
+from .checks import check_colorspace_name, check_conventions, check_levels, working_space
 from .steps import (
     _IO_PLACEHOLDERS,
     VARIABLES,

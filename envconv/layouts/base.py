@@ -77,6 +77,7 @@ PARTIAL_PAD = 6
 #: The options an aimed layout takes (:meth:`Layout.configure`).
 VIEW_OPTIONS = ("fov", "yaw", "pitch", "roll")
 
+
 @dataclass(frozen=True)
 class Cell:
     """One occupied cell: grid column and row, the face it holds, and its rotation.
