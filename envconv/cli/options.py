@@ -122,7 +122,7 @@ READ = [
 
 RESAMPLE = [
     ("to", click.option("--to", "to", required=True, type=layout_choice(), help="Output layout.")),
-    ("size", click.option("--size", callback=parse_size, metavar="N|WxH", help="Output N: face edge, lat-long height, disk diameter (docs/geometry.md, 'Sizes'); a perspective view's height, or its WxH. Default: the N that keeps the input's pixel pitch along the horizon (a 2048x1024 lat-long gives cube faces of 559, a lat-long of 1024; a view: the pitch at its axis); with --mips, N+2G is then rounded to the nearest power of two (--mips K: multiple of 2^(K-1)), so that every level holds whole cells (559 becomes 512).")),
+    ("size", click.option("--size", callback=parse_size, metavar="N|WxH", help="Output N: face edge, lat-long height, disk diameter (docs/geometry.md, 'Sizes'); a perspective view's height, or its WxH. Default: the N that keeps the input's pixel pitch along the horizon (a 2048x1024 lat-long gives cube faces of 559, a lat-long of 1024), a fisheye's or perspective view's at its axis; with --mips, N+2G is then rounded to the nearest power of two (--mips K: multiple of 2^(K-1)), so that every level holds whole cells (559 becomes 512).")),
     ("samples", click.option("--samples", default="auto", callback=parse_samples, show_default=True, help="Sub-samples per pixel edge S (S×S per pixel), or 'auto': per pixel, about two per source texel its edge spans.")),
     ("filter", click.option("--filter", "filter", type=click.Choice(list(FILTERS)), default="bilinear", show_default=True, help="Reconstruction filter for source reads.")),
     ("rotate", click.option("--rotate", metavar="YAW,PITCH,ROLL", help="Rotate the environment, degrees: about +Y, then +X, then +Z (right-hand rule).")),
