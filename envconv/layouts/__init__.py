@@ -1,7 +1,8 @@
 """The layout registry: every layout by name.
 
 Adding a layout means one new module and one line in ``_MODULE_LAYOUTS`` below (plus, for a new
-geometry family, its maps in ``src/core/layouts.h`` and one case in each dispatch there).
+geometry family, its code in ``src/core/chart.h``, its maps in ``src/core/layouts.h`` or
+``src/core/views.h`` and one case in each dispatch in ``layouts.h``).
 """
 
 from __future__ import annotations

@@ -29,7 +29,7 @@ import numpy as np
 
 from ..errors import LayoutError, UsageError
 
-# Geometry family codes: the native core's own (src/core/layouts.h, exported by
+# Geometry family codes: the native core's own (src/core/chart.h, exported by
 # src/core/module.cpp), which its kernels dispatch on; never restated here.
 from ..resample.kernels import (
     DISK_FAMILIES,
@@ -69,7 +69,7 @@ __all__ = [
     "VIEW_OPTIONS",
 ]
 
-#: Index of the reach among a chart's PARAM_COUNT parameters (src/core/layouts.h kReach).
+#: Index of the reach among a chart's PARAM_COUNT parameters (src/core/chart.h kReach).
 _REACH = 11
 #: Pixels of holes a partial source is padded with, around its cells (its guard ring grows by
 #: as much); directions it does not cover land in the middle of that ring (its reach).

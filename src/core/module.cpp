@@ -395,7 +395,7 @@ NB_MODULE(_core, m) {
     m.attr("AUTO_MAX_SAMPLES") = envconv::kAutoMaxSamples;
     m.attr("AUTO_EDGE_SAMPLES") = envconv::kAutoEdgeSamples;
     m.attr("FAMILY_COUNT") = envconv::kFamilyCount;
-    // The geometry family codes (src/core/layouts.h), the one table Python reads them from
+    // The geometry family codes (src/core/chart.h), the one table Python reads them from
     // (envconv/layouts/base.py FAMILY_*), and the families whose cells hold a unit disk.
     m.attr("FAMILY_LATLONG") = int(envconv::kLatlong);
     m.attr("FAMILY_CUBE_GL") = int(envconv::kCubeGL);
