@@ -26,7 +26,7 @@ LAYERS = [
     ("color", ["envconv.color"]),
     ("envmap", ["envconv.envmap"]),
     ("layouts", ["envconv.layouts"]),
-    ("foundation", ["envconv.errors", "envconv.lazy"]),
+    ("foundation", ["envconv.errors", "envconv.lazy", "envconv.limits"]),
 ]
 #: Modules that live in one layer's package and serve every layer as another: the native core's
 #: only door (the layouts' point maps call it), and the memory guard, which refuses a read, an

@@ -998,3 +998,105 @@ def test_batch_workers_that_cannot_start_stop_the_batch_in_one_line(tmp_path):
     assert "simulated: this environment cannot run a worker" in run.stderr
     assert not (tmp_path / "out").exists()
     assert_untouched(before)
+
+
+# --- processes, arguments and library use (issue 27, second half) ----------------------------
+# Truth: exit statuses and the one line the issue asks for, the files on disk (nothing written
+# where a run is refused), real symlink cycles, a fake /sys/fs/cgroup tree whose numbers are
+# written by the test, real signals, and outputs compared with envconv.convert of the input.
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--level", "100000000000000000000"], "--level"), (["--exposure", "1e308"], "--exposure"),
+    (["--exposure", "nan"], "--exposure"), (["--size", "100000000000000000000"], "--size"),
+    (["--roughness", "foo"], "--roughness"), (["--roughness", "0.5,2"], "--roughness"),
+])  # fmt: skip
+def test_numbers_no_image_can_have_are_usage_errors(tmp_path, args, message):
+    """They reached OpenImageIO (an int overflow), 2**1e308 or the memory guard's figures and
+    ended in exit 3 ('internal error') or a 33-digit number of gigabytes."""
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    _convert_fails(tmp_path, source, 2, message, *args)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--threads", "100000000000000000000", "convert", "{src}", "{out}", "--to", "latlong"],
+     "--threads"),
+    (["read", "{src}", "--level", "1e20", "resample", "--to", "latlong", "write", "{out}"],
+     "--level"),
+    (["read", "{src}", "exposure", "1e308", "resample", "--to", "latlong", "write", "{out}"],
+     "exposure"),
+    (["info", "{src}", "--level", "100000000000000000000"], "--level"),
+    (["pattern", "{out}", "--to", "latlong", "--size", "100000000000000000000"], "--size"),
+])  # fmt: skip
+def test_numbers_in_chains_and_other_commands_are_usage_errors(tmp_path, args, message):
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    out = tmp_path / "o.exr"
+    run = envconv(*[a.format(src=source, out=out) for a in args])
+    assert_failed_cleanly(run, 2, tmp_path, message=message)
+    assert not out.exists()
+
+
+def _graph_with(tmp_path, name: str, resample_extra: str = "", first: str = "") -> str:
+    """A graph file resampling sky.exr, with ``resample_extra`` (TOML or JSON members) added."""
+    if name.endswith(".json"):
+        first = first or ""
+        return ('{"inputs": ["sky.exr"], "steps": [' + first + '{"step": "resample", '
+                '"to": "latlong", "size": 8' + resample_extra + '}, '
+                '{"step": "write", "path": "{stem}_out.exr"}]}')  # fmt: skip
+    return ('inputs = ["sky.exr"]\n' + first + '[[steps]]\nstep = "resample"\nto = "latlong"\n'
+            + resample_extra + '\n[[steps]]\nstep = "write"\npath = "{stem}_out.exr"\n')  # fmt: skip
+
+
+_DEEP = 100_000
+
+
+@pytest.mark.parametrize("name, extra, first, message", [
+    ("g.json", ', "roughness": ' + "[" * _DEEP + "]" * _DEEP, "", "nested"),
+    ("g.toml", "roughness = " + "[" * _DEEP + "]" * _DEEP, "", "nested"),
+    ("g.toml", "roughness = " + "[" * 40 + "]" * 40, "", "nested"),
+    ("g.json", ', "guard": ' + "9" * 5000, "", "too large"),
+    ("g.toml", "size = " + "9" * 5000, "", "too large"),
+    ("g.toml", "size = " + "9" * 4000, "", "too large"),
+    ("g.toml", "size = 100000000000000000000", "", "size"),
+    ("g.toml", "size = 4194304", "", "size"),
+    ("g.toml", 'mips = "ggx"\nroughness = "foo"', "", "roughness"),
+    ("g.toml", "roughness = [0.5, 2.0]", "", "roughness"),
+    ("g.toml", "", '[[steps]]\nstep = "read"\nlevel = 100000000000000000000\n', "level"),
+    ("g.toml", "", '[[steps]]\nstep = "read"\nlevel = 32\n', "level"),
+    ("g.toml", "", '[[steps]]\nstep = "exposure"\nstops = 1e308\n', "stops"),
+    ("g.toml", "", '[[steps]]\nstep = "read"\nexposure = -1e300\n', "exposure"),
+])  # fmt: skip
+def test_graph_files_are_refused_before_any_job(tmp_path, name, extra, first, message):
+    """A graph nested 100 000 deep (RecursionError), a 5000-digit integer (ValueError of
+    Python's int limit), numbers no image can have and an unknown roughness: exit 2 with one
+    short line naming the file, before any job ran (``roughness = "foo"`` passed validation
+    and failed the job later, exit 1)."""
+    _map(tmp_path / "sky.exr")
+    graph = tmp_path / name
+    graph.write_text(_graph_with(tmp_path, name, extra, first))
+    run = envconv("run", graph)
+    assert_failed_cleanly(run, 2, tmp_path, message=message)
+    assert name in run.stderr and len(run.stderr) < 400, run.stderr
+    assert sorted(os.listdir(tmp_path)) == sorted([name, "sky.exr"])
+
+
+@pytest.mark.skipif(not os.path.exists("/dev/full"), reason="needs /dev/full")
+@pytest.mark.parametrize("args", [
+    ["convert", "{src}", "{out}", "--to", "latlong", "--size", "4"],
+    ["read", "{src}", "resample", "--to", "latlong", "--size", "4", "write", "{out}"],
+    ["info", "{src}"], ["info", "{src}", "--json"], ["layouts"], ["--help"], ["--version"],
+    ["convert", "{src}", "{out}", "--to", "latlong", "--dry-run"],
+    ["batch", "{src}", "--out", "{out}", "resample", "--to", "latlong", "--size", "4"],
+])  # fmt: skip
+def test_stdout_on_dev_full_is_one_line_exit_1(tmp_path, args):
+    """Results on a stdout that takes nothing: 'cannot write to stdout', exit 1 (was exit 3,
+    an internal OSError, or a traceback for --help)."""
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    argv = [ENVCONV, *(a.format(src=source, out=tmp_path / "o.exr") for a in args)]
+    with open("/dev/full", "w") as full:
+        done = subprocess.run(argv, stdout=full, stderr=subprocess.PIPE, text=True, timeout=60)
+    progress = [line for line in done.stderr.splitlines() if line.startswith("envconv: [")]
+    assert len(progress) == (1 if "batch" in args else 0), done.stderr  # batch's "[1/1] done"
+    errors = "".join(f"{line}\n" for line in done.stderr.splitlines() if line not in progress)
+    run = Run(argv, done.returncode, "", errors)
+    assert_failed_cleanly(run, 1, tmp_path, message="cannot write to stdout: No space left")

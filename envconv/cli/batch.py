@@ -16,6 +16,7 @@ from ..engine.batch import BatchInterrupted, expand_inputs, make_jobs, run_batch
 from ..engine.graph import load_graph
 from ..engine.pipeline import Pipeline, Resample, Write
 from .main import cli
+from .messages import echo_result
 from .options import echo_document, json_option, no_clobber_option
 from .progress import Progress, summary_line
 
@@ -145,7 +146,7 @@ def execute(jobs, workers=1, skip_existing=False, update=False, report=None, das
     if as_json:
         echo_document(command, result.records, result.seconds, result.events)
     else:
-        click.echo(summary_line(result.counts, result.seconds, len(jobs)))
+        echo_result(summary_line(result.counts, result.seconds, len(jobs)))
     if not result.ok:
         raise click.exceptions.Exit(1)
 
@@ -170,12 +171,12 @@ def _print_plan(jobs, json_command: str | None = None) -> None:
 
 
 def _echo_planned(record) -> None:
-    click.echo(record["input"])
+    echo_result(record["input"])
     if record["error"]:
-        click.echo(f"  error: {record['error']}")
+        echo_result(f"  error: {record['error']}")
     for o in record["maps"]:
         levels = f"{o['levels']} level{'s' if o['levels'] > 1 else ''}"
-        click.echo(f"  {o['layout']}  N={o['size']}  G={o['guard']}  {o['width']}x{o['height']}  "
+        echo_result(f"  {o['layout']}  N={o['size']}  G={o['guard']}  {o['width']}x{o['height']}  "
                    f"{levels}")  # fmt: skip
         for entry in o["files"]:
-            click.echo(f"    {entry['path']}")
+            echo_result(f"    {entry['path']}")

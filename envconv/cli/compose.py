@@ -11,6 +11,7 @@ from __future__ import annotations
 import click
 
 from .main import cli
+from .messages import echo_result
 
 __all__ = ["compose_steps", "run_chain"]
 
@@ -43,4 +44,4 @@ def run_chain(steps: list) -> None:
     pipeline.validate(require_writes=True)
     for output in pipeline.run(keep=False):
         for path in output.files:
-            click.echo(path)
+            echo_result(path)

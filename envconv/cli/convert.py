@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from .main import cli
+from .messages import echo_result
 from .options import (
     color_options,
     echo_document,
@@ -77,18 +78,18 @@ def convert_command(input_path, output_path, dry_run, as_json, preview, no_clobb
         echo_document("convert", [record], record["seconds"], dry_run=dry_run)
         return
     for path in record["outputs"]:
-        click.echo(path)
+        echo_result(path)
 
 
 def _echo_plan(plan: dict) -> None:
     """The dry-run report: one line per fact, then the files that would be written."""
     compression = plan["compression"] or "format default"
-    click.echo(f"layout: {plan['layout']}")
-    click.echo(f"size: {plan['size']} ({plan['width']}x{plan['height']} per file, "
+    echo_result(f"layout: {plan['layout']}")
+    echo_result(f"size: {plan['size']} ({plan['width']}x{plan['height']} per file, "
                f"guard {plan['guard']}, {plan['levels']} level(s))")  # fmt: skip
-    click.echo(f"channels: {','.join(plan['channels'])}")
-    click.echo(f"bit depth: {plan['bit_depth']} (compression: {compression})")
-    click.echo(f"colour: {plan['input_colorspace']} -> {plan['working_colorspace']} (working) "
+    echo_result(f"channels: {','.join(plan['channels'])}")
+    echo_result(f"bit depth: {plan['bit_depth']} (compression: {compression})")
+    echo_result(f"colour: {plan['input_colorspace']} -> {plan['working_colorspace']} (working) "
                f"-> {plan['output_colorspace']}")  # fmt: skip
     for path in plan["files"]:
-        click.echo(f"would write: {path}")
+        echo_result(f"would write: {path}")

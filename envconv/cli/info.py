@@ -6,8 +6,10 @@ import json
 
 import click
 
+from ..limits import check_level
 from .main import cli
-from .options import layout_choice
+from .messages import echo_result
+from .options import layout_choice, limited
 
 __all__ = ["info_command"]
 
@@ -15,7 +17,7 @@ __all__ = ["info_command"]
 @cli.command("info")
 @click.argument("input_path", metavar="INPUT")
 @click.option("--from", "from_", type=layout_choice(), help="Input layout (default: detect).")
-@click.option("--level", type=click.IntRange(min=0), default=0, help="MIP level to read.")
+@click.option("--level", default=0, callback=limited(check_level), metavar="INTEGER", help="MIP level to read.")  # fmt: skip
 @click.option(
     "--part", metavar="NAME", help="Part of a multi-part file to describe alone (name or index)."
 )
@@ -40,16 +42,16 @@ def info_command(input_path, from_, level, part, stats, as_json):
 
     record = describe(input_path, layout=from_, level=level, part=part, stats=stats)
     if as_json:
-        click.echo(json.dumps(record, indent=2, default=str))
+        echo_result(json.dumps(record, indent=2, default=str))
         return
     for key, value in record.items():
         if isinstance(value, dict):
-            click.echo(f"{key}:")
+            echo_result(f"{key}:")
             for k, v in value.items():
-                click.echo(f"  {k}: {v}")
+                echo_result(f"  {k}: {v}")
         elif isinstance(value, list) and value and isinstance(value[0], dict):
-            click.echo(f"{key}:")
+            echo_result(f"{key}:")
             for item in value:
-                click.echo("  - " + ", ".join(f"{k}: {v}" for k, v in item.items()))
+                echo_result("  - " + ", ".join(f"{k}: {v}" for k, v in item.items()))
         else:
-            click.echo(f"{key}: {value}")
+            echo_result(f"{key}: {value}")

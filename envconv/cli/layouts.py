@@ -2,9 +2,8 @@
 
 from __future__ import annotations
 
-import click
-
 from .main import cli
+from .messages import echo_result
 
 __all__ = ["layouts_command"]
 
@@ -30,19 +29,19 @@ def layouts_command():
     for name, layout in LAYOUTS.items():
         aliases = [alias for alias, target in ALIASES.items() if target == name]
         also = f" (also {', '.join(aliases)})" if aliases else ""
-        click.echo(f"{name:<{width}}  {layout.description}{also}")
-    click.echo("")
-    click.echo("world axis at the centre of each cube face (px..nz: the GL faces +X_c..-Z_c of")
-    click.echo("c = (-x, y, z), each an unmirrored view from inside, so px holds world -X):")
+        echo_result(f"{name:<{width}}  {layout.description}{also}")
+    echo_result("")
+    echo_result("world axis at the centre of each cube face (px..nz: the GL faces +X_c..-Z_c of")
+    echo_result("c = (-x, y, z), each an unmirrored view from inside, so px holds world -X):")
     for name in FAMILIES["cubemap"]:
         faces = "  ".join(f"{face} {axis}" + (" (turned 180 degrees)" if turns else "")
                           for face, axis, turns in face_axes(name))  # fmt: skip
-        click.echo(f"{name:<{width}}  {faces}")
-    click.echo("")
-    click.echo("face sets of cube-faces (--in-convention / --out-convention NAME):")
+        echo_result(f"{name:<{width}}  {faces}")
+    echo_result("")
+    echo_result("face sets of cube-faces (--in-convention / --out-convention NAME):")
     width = max(len(name) for name in FACE_SETS)
     files = {name: " ".join(s.order()) for name, s in FACE_SETS.items()}
     fwidth = max(len(text) for text in files.values())
     for name, face_set in FACE_SETS.items():
         also = f" (also {', '.join(face_set.aliases)})" if face_set.aliases else ""
-        click.echo(f"{name:<{width}}  {files[name]:<{fwidth}}  {face_set.tool}{also}")
+        echo_result(f"{name:<{width}}  {files[name]:<{fwidth}}  {face_set.tool}{also}")

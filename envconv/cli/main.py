@@ -24,7 +24,8 @@ import click
 
 from .. import __version__
 from ..errors import EnvconvError, UsageError
-from .messages import did_you_mean, one_line, step_typo
+from ..limits import MAX_THREADS
+from .messages import did_you_mean, one_line, stdout_failed, step_typo
 
 __all__ = ["cli", "main", "EnvconvCommand", "COMMANDS"]
 
@@ -126,6 +127,9 @@ class EnvconvGroup(click.Group):
                 _interrupted(exc.__cause__)
             click.echo("envconv: aborted", err=True)
             sys.exit(1)
+        except OSError as exc:  # click's own --help or --version on a stdout that takes nothing
+            _say(f"envconv: error: {stdout_failed(exc)}")
+            sys.exit(1)
         sys.exit(result if isinstance(result, int) else 0)
 
     def list_commands(self, ctx):
@@ -187,7 +191,7 @@ class EnvconvGroup(click.Group):
 @click.option("-v", "--verbose", count=True, help="More log output (-vv for debug).")
 @click.option(
     "--threads",
-    type=click.IntRange(min=1),
+    type=click.IntRange(1, MAX_THREADS),
     default=None,
     metavar="N",
     help="Threads for resampling (default: ENVCONV_THREADS, else one per core).",
@@ -218,6 +222,14 @@ def cli(verbose: int, threads: int | None) -> None:
         from ..resample.kernels import set_threads
 
         set_threads(threads)
+
+
+def _say(line: str) -> None:
+    """``line`` on stderr, if stderr takes it."""
+    try:
+        click.echo(line, err=True)
+    except OSError:
+        pass
 
 
 def _interrupted(exc: BaseException) -> None:

@@ -4,6 +4,7 @@
 line. :func:`one_line` folds a message of several lines (click's "Choose from:" lists, a
 library's own lines) into one; :func:`did_you_mean` finds the names close to a typo;
 :func:`show_warning` prints a Python warning (numpy's) as one ``envconv: warning:`` line;
+:func:`echo_result` is the one place results reach stdout;
 :func:`step_typo` finds, in the arguments of a chained step, a word that is a misspelt step name
 (``envconv read sky.exr resampel --to latlong``), which click would otherwise report as an
 unknown option of the step before it.
@@ -16,7 +17,43 @@ import os
 import re
 import sys
 
-__all__ = ["one_line", "did_you_mean", "step_typo", "show_warning"]
+import click
+
+from ..errors import EnvconvError
+
+__all__ = ["one_line", "did_you_mean", "step_typo", "show_warning", "echo_result", "StdoutError",
+           "stdout_failed"]  # fmt: skip
+
+
+class StdoutError(EnvconvError):
+    """Results could not be written on stdout (a full disk, ``/dev/full``, an I/O error)."""
+
+
+def echo_result(line: str = "") -> None:
+    """Print one line of results on stdout: the one place the command line writes results.
+
+    A stdout that cannot take it raises :class:`StdoutError` ("cannot write to stdout: No
+    space left on device": one line on stderr, exit 1) after pointing descriptor 1 at
+    ``/dev/null``, so that the interpreter's last flush cannot fail again. A closed pipe
+    (``envconv layouts | head``) is click's to end quietly.
+    """
+    try:
+        click.echo(line)
+    except BrokenPipeError:
+        raise
+    except OSError as exc:
+        raise stdout_failed(exc) from None
+
+
+def stdout_failed(exc: OSError) -> StdoutError:
+    """The error for a failed write on stdout; what is still buffered is dropped."""
+    try:
+        null = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(null, 1)
+        os.close(null)
+    except OSError:
+        pass
+    return StdoutError(f"cannot write to stdout: {exc.strerror or exc}")
 
 
 def one_line(message: str) -> str:

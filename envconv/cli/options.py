@@ -13,11 +13,14 @@ import click
 
 from ..errors import LayoutError
 from ..layouts import layout_names, resolve_layout_name
+from ..limits import check_level, check_stops
 from ..resample.convert import FILTERS
+from .messages import echo_result
 
 __all__ = [
     "json_option",
     "echo_document",
+    "limited",
     "refuse_overwrite",
     "no_clobber_option",
     "layout_choice",
@@ -59,6 +62,23 @@ def _checked(check, value):
         return check(value)
     except UsageError as exc:
         raise click.BadParameter(str(exc)) from None
+
+
+def limited(check):
+    """A click callback running one of :mod:`envconv.limits`'s checks (None passes)."""
+
+    def callback(ctx, param, value):
+        return None if value is None else _checked(check, value)
+
+    return callback
+
+
+def parse_roughness(ctx, param, value):
+    """``--roughness``: a mapping name or ``R1,R2,…`` in [0, 1], checked before any work."""
+    from ..resample.options import check_roughness
+
+    _checked(check_roughness, value)
+    return value
 
 
 def parse_samples(ctx, param, value):
@@ -114,7 +134,7 @@ _OCIO_CONFIG = (
 # Each entry: (library keyword, click decorator).
 READ = [
     ("layout", click.option("--from", "layout", type=layout_choice(), help="Input layout (default: detect from metadata or aspect).")),
-    ("level", click.option("--level", type=click.IntRange(min=0), default=0, show_default=True, help="MIP level of the input to read.")),
+    ("level", click.option("--level", default=0, callback=limited(check_level), show_default=True, metavar="INTEGER", help="MIP level of the input to read.")),
     ("part", click.option("--part", metavar="NAME", help="Part of a multi-part input to read alone, by name or index (default: every part of the first part's windows).")),
     ("input_colorspace", click.option("--input-colorspace", "input_colorspace", metavar="NAME", help="OCIO colour space of the input (default: its oiio:ColorSpace, else linear for float, sRGB for 8/16-bit).")),
     _OCIO_CONFIG,
@@ -133,7 +153,7 @@ RESAMPLE = [
     ("up", click.option("--up", type=click.Choice(["y", "z"], case_sensitive=False), help="Up axis of the input's world; z turns its +Z into +Y (same as --axes=x,z,-y).")),
     ("axes", click.option("--axes", metavar="AXES", help="Remap the input's axes by a signed permutation: --axes=-x,z,y makes envconv's (x, y, z) the input's (-x, z, y).")),
     ("mips", click.option("--mips", is_flag=False, flag_value="all", default=None, callback=parse_mips, metavar="[K|ggx[:K]]", help="Write a mip chain: alone, every level down to 1x1; --mips K, K levels; --mips ggx, GGX-prefiltered levels for image-based lighting. EXR/TIFF/DDS/KTX2: one file; other formats: {level} in the path.")),
-    ("roughness", click.option("--roughness", default="gltf", show_default=True, metavar="gltf|filament|unreal|R1,R2,..", help="Roughness of each --mips ggx level: glTF-IBL-Sampler's k/(L-1), Filament's or Unreal's mapping, or a list for levels 1.. (see docs/ibl.md).")),
+    ("roughness", click.option("--roughness", default="gltf", callback=parse_roughness, show_default=True, metavar="gltf|filament|unreal|R1,R2,..", help="Roughness of each --mips ggx level: glTF-IBL-Sampler's k/(L-1), Filament's or Unreal's mapping, or a list for levels 1.. (see docs/ibl.md).")),
     ("irradiance", click.option("--irradiance", is_flag=True, help="Write the cosine-convolved environment E/pi (diffuse image-based lighting) instead of the environment.")),
     ("fov", click.option("--fov", metavar="DEG|H,V", help="Field of view of a fisheye (its diameter; default 180, as ffmpeg) or perspective output (horizontal, or H,V; default 90).")),
     ("yaw", click.option("--yaw", type=float, metavar="DEG", help="Aim a fisheye or perspective output: turn the view right by DEG (as ffmpeg v360's yaw).")),
@@ -151,7 +171,7 @@ WRITE = [
 
 #: Options of :func:`envconv.color.prepare.prepare_input` (range and NaN/Inf of the source).
 COLOR = [
-    ("exposure", click.option("--exposure", type=float, default=0.0, metavar="STOPS", help="Scale colour by 2**STOPS before resampling (e.g. -2 to fit HDR into 8 bits).")),
+    ("exposure", click.option("--exposure", default=0.0, callback=limited(check_stops), metavar="STOPS", help="Scale colour by 2**STOPS before resampling (e.g. -2 to fit HDR into 8 bits).")),
     ("fix_nonfinite", click.option("--fix-nonfinite", "fix_nonfinite", type=click.Choice(["none", "black", "box3", "error"]), default="none", show_default=True, help="Replace NaN/Inf in the input: with 0, with the mean of finite 3x3 neighbours, or stop.")),
     ("clamp_negative", click.option("--clamp-negative", "clamp_negative", is_flag=True, help="Set negative input values to 0 (kept by default).")),
 ]  # fmt: skip
@@ -216,4 +236,4 @@ def echo_document(command: str, records: list, seconds: float, events=None,
 
     from ..engine.records import document
 
-    click.echo(json.dumps(document(command, records, seconds, events, dry_run), indent=2))
+    echo_result(json.dumps(document(command, records, seconds, events, dry_run), indent=2))

@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from .main import cli
+from .messages import echo_result
 from .options import (
     layout_choice,
     parse_guard,
@@ -79,4 +80,4 @@ def pattern_command(output_path, to, size, samples, convention, guard, alpha, fo
     layout, n = output_layout(None, to, size, fov, yaw, pitch, roll)  # size is never None here
     envmap = render_pattern(layout, n, samples, resample_kw.get("out_convention"), guard, alpha)
     for path in io.write(envmap, output_path, **write_kw):
-        click.echo(path)
+        echo_result(path)

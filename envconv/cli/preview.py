@@ -5,6 +5,7 @@ from __future__ import annotations
 import click
 
 from .main import cli
+from .messages import echo_result
 from .options import layout_choice, refuse_overwrite
 
 __all__ = ["preview_command"]
@@ -79,4 +80,4 @@ def preview_command(input_path, output_path, layout, in_convention, convention, 
         raise click.BadParameter(str(exc), param_hint="--convention") from None
     envmap = io.read(input_path, layout=layout, input_colorspace=input_colorspace)
     sheet = contact_sheet(envmap, exposure, view, in_convention, convention=convention)
-    click.echo(write_picture(sheet, output_path))
+    echo_result(write_picture(sheet, output_path))

@@ -7,6 +7,7 @@ import json
 import click
 
 from .main import cli
+from .messages import echo_result
 from .options import layout_choice
 
 __all__ = ["sh_command"]
@@ -33,4 +34,4 @@ def sh_command(input_path, from_, frame):
     from ..io import read
     from ..resample.harmonics import sh_record
 
-    click.echo(json.dumps(sh_record(read(input_path, layout=from_), frame), indent=2))
+    echo_result(json.dumps(sh_record(read(input_path, layout=from_), frame), indent=2))

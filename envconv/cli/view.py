@@ -7,6 +7,7 @@ import os
 import click
 
 from .main import cli
+from .messages import echo_result
 from .options import layout_choice, refuse_overwrite
 
 __all__ = ["view_command"]
@@ -69,7 +70,7 @@ def view_command(input_path, output_path, open_page, layout, in_convention, inpu
     refuse_overwrite(input_path, output_path)
     envmap = io.read(input_path, layout=layout, input_colorspace=input_colorspace)
     page = build_page(envmap, os.path.basename(input_path), in_convention, cap)
-    click.echo(write_page(page, output_path))
+    echo_result(write_page(page, output_path))
     if open_page:
         import webbrowser
 

@@ -31,6 +31,7 @@ import numpy as np
 
 from ..envmap import EnvMap, map_levels
 from ..errors import ColorError, UsageError
+from ..limits import check_stops
 from .quantize import as_image as _as_image
 from .quantize import colour_slice as _colour
 
@@ -510,9 +511,7 @@ def apply_exposure(pixels: np.ndarray, stops: float) -> np.ndarray:
     >>> apply_exposure(np.ones((1, 1, 4), np.float32), -1).ravel().tolist()
     [0.5, 0.5, 0.5, 1.0]
     """
-    stops = float(stops)
-    if not np.isfinite(stops):
-        raise UsageError(f"exposure must be a finite number of stops, got {stops}")
+    stops = check_stops(stops)
     arr = _as_image(pixels)
     if stops == 0.0:
         return arr

@@ -37,8 +37,18 @@ from .. import io
 from ..color.prepare import FIX_MODES
 from ..errors import EnvconvError, UsageError
 from ..layouts import get_layout
+from ..limits import (
+    MAX_DEPTH,
+    MAX_LEVEL,
+    MAX_SIZE,
+    MAX_STOPS,
+    check_level,
+    check_stops,
+    check_tree,
+    shown,
+)
 from ..resample.convert import FILTERS, convert
-from ..resample.options import check_guard, check_mips, check_samples, check_size
+from ..resample.options import check_guard, check_mips, check_roughness, check_samples, check_size
 from .pipeline import Colorspace, Exposure, Pipeline, Read, Resample, Rotate, Step, Write
 from .steps import PREPARE_OPTIONS, check_variables
 
@@ -106,12 +116,25 @@ def load_graph(path: str | os.PathLike, recipe: bool | None = None) -> Graph:
         raise UsageError(f"cannot read graph file {path}: {exc.strerror or exc}") from None
     if path.lower().endswith(".json"):
         try:
-            data = json.loads(raw.decode("utf-8"))
+            data = _parsed(path, lambda: json.loads(raw.decode("utf-8")))
         except (UnicodeDecodeError, json.JSONDecodeError) as exc:
             raise UsageError(f"{path}: not valid JSON: {exc}") from None
     else:
         data = _parse_toml(path, raw)
     return parse_graph(data, path, recipe)
+
+
+def _parsed(path: str, parse) -> Any:
+    """``parse()``, with what no parser survives as a usage error: nesting deeper than the
+    interpreter's stack, and integers longer than Python turns into numbers (4300 digits)."""
+    try:
+        return parse()
+    except RecursionError:
+        raise UsageError(f"{path}: nested too deeply (at most {MAX_DEPTH} levels)") from None
+    except ValueError as exc:
+        if "digits" not in str(exc) or isinstance(exc, json.JSONDecodeError):
+            raise
+        raise UsageError(f"{path}: a number is too large (thousands of digits)") from None
 
 
 def _parse_toml(path: str, raw: bytes) -> Any:
@@ -124,7 +147,7 @@ def _parse_toml(path: str, raw: bytes) -> Any:
             raise UsageError(f"{path}: reading TOML needs Python ≥ 3.11 or tomli; "
                              "or write the graph as JSON") from None  # fmt: skip
     try:
-        return tomllib.loads(raw.decode("utf-8"))
+        return _parsed(path, lambda: tomllib.loads(raw.decode("utf-8")))
     except (UnicodeDecodeError, tomllib.TOMLDecodeError) as exc:
         raise UsageError(f"{path}: not valid TOML: {exc}") from None
 
@@ -133,6 +156,10 @@ def parse_graph(data: Any, path: str = "<graph>", recipe: bool | None = None) ->
     """Build a :class:`Graph` from parsed TOML/JSON data (see the module docstring)."""
     if not isinstance(data, dict):
         raise UsageError(f"{path}: expected a table at the top level")
+    try:
+        check_tree(data)
+    except UsageError as exc:
+        raise UsageError(f"{path}: {exc}") from None
     for key in data:
         if key not in _TOP_KEYS:
             raise UsageError(f"{path}: unknown top-level key {key!r}; known: "
@@ -296,29 +323,30 @@ def _angles(value: Any) -> str | None:
 
 
 def _roughness(value: Any) -> str | None:
-    if (
-        isinstance(value, str)
-        and value
-        or (isinstance(value, list) and value and all(_is_number(v) for v in value))
-    ):
+    if _passes(check_roughness, value):
         return None
-    return "gltf, filament, unreal, 'R1,R2,...' or a list of numbers"
+    return "gltf, filament, unreal or a list of numbers in [0, 1]"
 
 
 _BOOL = lambda value: None if isinstance(value, bool) else "true or false"  # noqa: E731
 _NUMBER = lambda value: None if _is_number(value) else "a finite number"  # noqa: E731
+_STOPS = lambda value: (  # noqa: E731
+    None
+    if _is_number(value) and _passes(check_stops, value)
+    else f"a number of stops in ±{MAX_STOPS:g}"
+)
 
 #: What each key of a step takes: a function returning None, or what was expected.
 CHECKS: dict[str, Any] = {
     "path": _text, "preview": _text, "dst": _text, "src": _text, "config": _text,
     "ocio_config": _text, "input_colorspace": _text, "output_colorspace": _text,
     "axes": _text, "to": _layout, "layout": _layout,
-    "size": lambda v: None if (_is_int(v) and v >= 1) or (isinstance(v, (str, list)) and
-                               _passes(check_size, v)) else "a positive integer, or 'WxH'",
+    "size": lambda v: None if (_is_int(v) or isinstance(v, (str, list))) and _passes(check_size, v)
+    else f"an integer in 1..{MAX_SIZE}, or 'WxH'",
     "fov": lambda v: None if _is_number(v) or isinstance(v, str) or (
         isinstance(v, list) and len(v) == 2 and all(_is_number(x) for x in v)) else
     "degrees: a number, 'H,V' or [H, V]",
-    "level": lambda v: None if _is_int(v) and v >= 0 else "a non-negative integer",
+    "level": lambda v: None if _is_int(v) and _passes(check_level, v) else f"an integer in 0..{MAX_LEVEL}",
     "part": lambda v: None if (_is_int(v) and v >= 0) or (isinstance(v, str) and v) else
     "a part name or index",
     "samples": lambda v: None if v == "auto" or _is_int(v) and _passes(check_samples, v) else
@@ -332,7 +360,7 @@ CHECKS: dict[str, Any] = {
     "true, false, a number of levels, 'all', 'box[:K]' or 'ggx[:K]'",
     "roughness": _roughness, "up": _choice("y", "z"),
     "in_convention": _convention, "out_convention": _convention, "faces": _face_set,
-    "stops": _NUMBER, "yaw": _NUMBER, "pitch": _NUMBER, "roll": _NUMBER, "exposure": _NUMBER,
+    "stops": _STOPS, "yaw": _NUMBER, "pitch": _NUMBER, "roll": _NUMBER, "exposure": _STOPS,
     "angles": _angles, "rotate": _angles,
     "bit_depth": _choice("half", "float", "uint8", "uint16"),
     "compression": _compression, "fix_nonfinite": _choice(*FIX_MODES),
@@ -342,4 +370,4 @@ CHECKS: dict[str, Any] = {
 def _check_value(key: str, value: Any) -> str | None:
     """A problem with ``value`` for ``key`` (``expected …, got …``), or None."""
     expected = CHECKS[key](value)
-    return None if expected is None else f"expected {expected}, got {value!r}"
+    return None if expected is None else f"expected {expected}, got {shown(value)}"

@@ -18,6 +18,7 @@ from ..envmap import EnvMap
 from ..errors import UsageError
 from ..layouts import get_layout
 from ..layouts.rotation import parse_rotation, rotation_matrix
+from ..limits import check_level, check_stops
 
 __all__ = [
     "Step", "Read", "Rotate", "Exposure", "Colorspace", "Resample", "Write", "Output",
@@ -63,6 +64,10 @@ class Read(Step):
     kind = "read"
 
     def __init__(self, path: str | os.PathLike | None = None, **options: Any) -> None:
+        if options.get("level") is not None:
+            options["level"] = check_level(options["level"])
+        if options.get("exposure") is not None:
+            options["exposure"] = check_stops(options["exposure"])
         super().__init__(path=None if path is None else os.fspath(path), **options)
 
     @property
@@ -101,13 +106,7 @@ class Exposure(Step):
     kind = "exposure"
 
     def __init__(self, stops: float) -> None:
-        try:
-            value = float(stops)
-        except (TypeError, ValueError):
-            raise UsageError(f"exposure expects a number of stops, got {stops!r}") from None
-        if not math.isfinite(value):
-            raise UsageError(f"exposure must be finite, got {stops!r}")
-        super().__init__(stops=value)
+        super().__init__(stops=check_stops(stops))
 
 
 class Colorspace(Step):
@@ -122,7 +121,8 @@ class Colorspace(Step):
 class Resample(Step):
     """Resample the source into layout ``to``; keywords are :func:`envconv.convert`'s.
 
-    ``mips`` is passed on only when set, to a build whose ``convert`` knows it.
+    ``mips`` is passed on only when set, to a build whose ``convert`` knows it. The numbers
+    and the roughness are checked here, before any file is opened (:mod:`envconv.limits`).
     """
 
     kind = "resample"
@@ -130,6 +130,11 @@ class Resample(Step):
     def __init__(self, to: str, size: int | None = None, samples: int | str = "auto",
                  filter: str = "bilinear", alpha: bool = False, guard: int | str = 0,
                  mips: Any = None, rotate: Any = None, **options: Any) -> None:  # fmt: skip
+        from ..resample.options import check_roughness, check_size
+
+        check_size(size)  # N or a view's WxH, each within envconv.limits' bound
+        if options.get("roughness") is not None:
+            check_roughness(options["roughness"])
         super().__init__(to=get_layout(to).name, size=size, samples=samples, filter=filter,
                          alpha=alpha, guard=guard, mips=mips, rotate=rotate, **options)  # fmt: skip
 

@@ -51,6 +51,7 @@ from ..layouts import Layout, get_layout
 from ..layouts.conventions import apply_remap, environment_axes, resolve_convention
 from ..layouts.geometry import kernel_geometry, pixel_pitch
 from ..layouts.rotation import parse_rotation, rotation_matrix
+from ..limits import check_size
 from . import kernels
 from .options import (
     FILTERS,
@@ -208,6 +209,7 @@ def _resample(
         size = default_size(envmap, to, cout, mips=_chain_request(mips, ggx), guard=guard)
     if not isinstance(size, (int, np.integer)) or size < 1:
         raise LayoutError(f"size must be a positive integer, got {size!r}")
+    size = check_size(size)
     n_samples = check_samples(samples)
     if n_samples is None and mips:
         n_samples = auto_samples(envmap, to, size)

@@ -59,6 +59,7 @@ from ..layouts import Layout, get_layout
 from ..layouts.base import FAMILY_CUBE_GL
 from ..layouts.geometry import horizon_pitch, kernel_geometry
 from . import kernels
+from .options import ROUGHNESS_MAPPINGS, check_roughness
 
 __all__ = [
     "ROUGHNESS_MAPPINGS",
@@ -71,7 +72,6 @@ __all__ = [
 
 log = logging.getLogger(__name__)
 
-ROUGHNESS_MAPPINGS = ("gltf", "filament", "unreal")
 #: Expansion step bound (see src/core/ibl.h): looser for narrow lobes, where most texels are.
 #: Set against brute-force integrals (benchmarks/ibl_accuracy.py; nodes brighter than the mean
 #: are held tighter in the core): at 2.4 for the narrow lobes every level of the bench's chain
@@ -121,18 +121,9 @@ def roughness_levels(mapping, count: int) -> list[float]:
 
 
 def parse_roughness(value):
-    """A mapping name, or a list of floats from ``"0.1,0.2,…"`` (the CLI's --roughness)."""
-    if value is None:
-        return "gltf"
-    if not isinstance(value, str):
-        return [float(v) for v in value]
-    if value in ROUGHNESS_MAPPINGS:
-        return value
-    try:
-        return [float(v) for v in value.split(",") if v.strip()]
-    except ValueError:
-        raise UsageError(f"roughness must be one of {', '.join(ROUGHNESS_MAPPINGS)} or a "
-                         f"comma-separated list of numbers, got {value!r}") from None  # fmt: skip
+    """A mapping name, or a list of floats from ``"0.1,0.2,…"`` (the CLI's --roughness) or a
+    list; the check of :func:`envconv.resample.options.check_roughness`."""
+    return check_roughness(value)
 
 
 def _pow2(n: float) -> int:

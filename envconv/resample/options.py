@@ -17,14 +17,17 @@ from ..errors import UsageError
 from ..layouts import Layout, get_layout
 from ..layouts.conventions import resolve_convention
 from ..layouts.geometry import horizon_pitch
+from ..limits import check_size as bounded_size
 
-__all__ = ["FILTERS", "MAX_SAMPLES", "default_size", "auto_samples", "check_samples", "check_guard",
-           "check_mips", "check_conventions", "output_channels", "check_size", "check_output",
-           "output_layout"]  # fmt: skip
+__all__ = ["FILTERS", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
+           "check_samples", "check_guard", "check_mips", "check_conventions", "check_roughness",
+           "output_channels", "check_size", "check_output", "output_layout"]  # fmt: skip
 
 #: Reconstruction filters by name → kernel code.
 FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
 MAX_SAMPLES = 32
+#: How a GGX chain's levels get their roughness (:func:`envconv.resample.ibl.roughness_levels`).
+ROUGHNESS_MAPPINGS = ("gltf", "filament", "unreal")
 
 
 def default_size(source: EnvMap, to: Layout | str, out_convention=None, mips=None,
@@ -65,7 +68,7 @@ def default_size(source: EnvMap, to: Layout | str, out_convention=None, mips=Non
 def check_size(size) -> tuple[int | None, int | None]:
     """(N, width) of ``size``: None (the default), N, ``"N"``, ``"WxH"`` or (W, H); width is
     None unless a W × H size was given (a perspective view's, N being its height). UsageError
-    for anything else."""
+    for anything else, and for a number beyond :data:`envconv.limits.MAX_SIZE`."""
     if size is None:
         return None, None
     if isinstance(size, str):
@@ -76,9 +79,9 @@ def check_size(size) -> tuple[int | None, int | None]:
     if isinstance(size, (tuple, list)):
         if len(size) != 2 or not all(isinstance(v, numbers.Integral) and v >= 1 for v in size):
             raise UsageError(f"size must be N or (W, H), positive integers, got {size!r}")
-        return int(size[1]), int(size[0])
+        return bounded_size(size[1]), bounded_size(size[0])
     if isinstance(size, numbers.Integral) and not isinstance(size, bool) and size >= 1:
-        return int(size), None
+        return bounded_size(size), None
     raise UsageError(
         f"size must be a positive integer (or WxH for a perspective view), got {size!r}"
     )
@@ -201,3 +204,32 @@ def check_conventions(to: Layout | str, out_convention=None, mips=None, source=N
     if cout.remap is not None and chain:
         raise UsageError(f"out_convention {cout.name} moves cells; it cannot be used with mips")
     return cin, cout
+
+
+def check_roughness(roughness) -> str | list[float]:
+    """The roughness of a GGX chain's levels: a mapping name (:data:`ROUGHNESS_MAPPINGS`;
+    None gives ``"gltf"``) or the perceptual roughness of levels 1, 2, … each in [0, 1], as a
+    list of numbers or the command line's ``"0.1,0.4,1"``; UsageError otherwise. How many
+    values a chain needs is checked once its level count is known
+    (:func:`envconv.resample.ibl.roughness_levels`)."""
+    if roughness is None:
+        return "gltf"
+    if isinstance(roughness, str) and roughness in ROUGHNESS_MAPPINGS:
+        return roughness
+    expected = (f"roughness must be one of {', '.join(ROUGHNESS_MAPPINGS)} or a list of numbers "
+                "in [0, 1] (comma-separated on the command line)")  # fmt: skip
+    if isinstance(roughness, str):
+        parts: list = [p for p in roughness.split(",") if p.strip()]
+    elif isinstance(roughness, (list, tuple)):
+        parts = list(roughness)
+        if not all(isinstance(v, numbers.Real) and not isinstance(v, bool) for v in parts):
+            raise UsageError(f"{expected}, got {roughness!r:.60}")
+    else:
+        raise UsageError(f"{expected}, got {roughness!r:.60}")
+    try:
+        values = [float(v) for v in parts]
+    except (TypeError, ValueError, OverflowError):
+        raise UsageError(f"{expected}, got {roughness!r:.60}") from None
+    if not values or not all(0.0 <= v <= 1.0 for v in values):
+        raise UsageError(f"{expected}, got {roughness!r:.60}")
+    return values
