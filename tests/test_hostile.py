@@ -1100,3 +1100,41 @@ def test_stdout_on_dev_full_is_one_line_exit_1(tmp_path, args):
     errors = "".join(f"{line}\n" for line in done.stderr.splitlines() if line not in progress)
     run = Run(argv, done.returncode, "", errors)
     assert_failed_cleanly(run, 1, tmp_path, message="cannot write to stdout: No space left")
+
+
+def _cyclic_tree(root):
+    """tree/a/b/sky.exr under three links back up (a cycle Python's glob walks 3^40 ways),
+    a link to a folder outside the tree (itself holding a link to itself) and a link to a
+    file; tree/.hidden/ and a dangling link are not inputs."""
+    tree, library = root / "tree", root / "library"
+    (tree / "a" / "b").mkdir(parents=True)
+    library.mkdir()
+    (tree / ".hidden").mkdir()
+    _map(tree / "a" / "b" / "sky.exr", 1.0)
+    _map(library / "far.exr", 2.0)
+    _map(tree / ".hidden" / "secret.exr", 3.0)
+    for name, target in (("up", ".."), ("top", "../.."), ("again", "../../a")):
+        os.symlink(target, tree / "a" / "b" / name)
+    os.symlink("../library", tree / "lib")
+    os.symlink("../library", library / "self")
+    os.symlink("a/b/sky.exr", tree / "near.exr")
+    os.symlink("missing", tree / "dangling")
+    return tree
+
+
+def test_a_recursive_glob_over_a_link_cycle_ends(tmp_path):
+    """``tree/**/*.exr`` followed the cycle's links until the paths grew too long, 3 ways at
+    each level: it never returned. Each real folder is walked once; a link to a file or a
+    folder counts, under its first name."""
+    tree = _cyclic_tree(tmp_path)
+    report = tmp_path / "report.json"
+    run = envconv("batch", f"{tree}/**/*.exr", "--out", tmp_path / "out" / "{stem}.exr",
+                  "--report", report, "resample", "--to", "latlong", "--size", 4,
+                  timeout=60)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    inputs = [r["input"] for r in json.loads(report.read_text())["files"]]
+    assert inputs == [str(tree / "a/b/sky.exr"), str(tree / "lib/far.exr"), str(tree / "near.exr")]
+    assert sorted(os.listdir(tmp_path / "out")) == ["far.exr", "near.exr", "sky.exr"]
+    from envconv import io
+
+    assert np.allclose(io.read(tmp_path / "out" / "far.exr").pixels, 2.0, rtol=1e-3)

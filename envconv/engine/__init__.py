@@ -6,7 +6,7 @@
 * :mod:`~envconv.engine.api`: ``convert_file`` and friends, the command line's library calls;
 * :mod:`~envconv.engine.graph`: TOML graph files into pipelines;
 * :mod:`~envconv.engine.batch`, :mod:`~envconv.engine.workers`: many inputs, local processes
-  or Dask;
+  or Dask; :mod:`~envconv.engine.globs`: their input globs (``**`` never into a link cycle);
 * :mod:`~envconv.engine.outputs`: the output policy (never onto an input, never twice, ``-n``);
 * :mod:`~envconv.engine.memory`: the memory estimate and guard;
 * :mod:`~envconv.engine.interrupt`: SIGINT and SIGTERM end a run cleanly.

@@ -36,6 +36,7 @@ from ..errors import EnvconvError, ImageIOError, UsageError
 from ..io import FORMATS
 from ..io.face_files import face_glob
 from ..io.temps import is_temp_name
+from .globs import glob_files
 from .outputs import check_outputs, input_files
 from .pipeline import Pipeline, Read, Resample, Write, path_variables
 
@@ -91,8 +92,10 @@ class BatchResult:
 def expand_inputs(patterns: Iterable[str]) -> list[str]:
     """Absolute, sorted, de-duplicated input files from paths, globs and directories.
 
-    A directory contributes its image files (by extension, not recursive). A glob or directory
-    that yields nothing, or a plain path that does not exist, is an error before any work.
+    A directory contributes its image files (by extension, not recursive). A glob's ``**``
+    follows links to folders but walks each real folder once, never into a cycle
+    (:mod:`envconv.engine.globs`). A glob or directory that yields nothing, or a plain path
+    that does not exist, is an error before any work.
     envconv's own temporary files (:func:`envconv.io.temps.is_temp_name`) are never inputs.
     """
     found: dict[str, None] = {}
@@ -107,8 +110,7 @@ def expand_inputs(patterns: Iterable[str]) -> list[str]:
                 raise ImageIOError(f"input not found: {pattern}")
             matches = [pattern]
         else:
-            matches = sorted(p for p in glob.glob(pattern, recursive=True)
-                             if os.path.isfile(p) and not is_temp_name(p))  # fmt: skip
+            matches = [p for p in glob_files(pattern) if not is_temp_name(p)]
         if not matches:
             raise ImageIOError(f"no input files match {pattern}")
         for match in matches:
