@@ -13,6 +13,7 @@ import resource
 import signal
 import struct
 import subprocess
+import sys
 import time
 
 import numpy as np
@@ -1138,3 +1139,27 @@ def test_a_recursive_glob_over_a_link_cycle_ends(tmp_path):
     from envconv import io
 
     assert np.allclose(io.read(tmp_path / "out" / "far.exr").pixels, 2.0, rtol=1e-3)
+
+
+def test_a_v1_memory_cgroup_limit_refuses_before_allocating(tmp_path):
+    """In a v1 memory cgroup (1 GiB here, a fake /sys/fs/cgroup tree) the guard read only v2's
+    memory.max and MemAvailable (64 GiB here): an over-large run went on and was OOM-killed
+    with no message. Now: one line naming the memory, exit 1, nothing written."""
+    from test_memory import _V1_MOUNTS, _V1_UNLIMITED, cgroup_tree
+
+    group = "/sys/fs/cgroup/memory/jobs/run7/"
+    root = cgroup_tree(tmp_path / "system", "4:memory:/jobs/run7\n0::/\n", _V1_MOUNTS.format(root="/"), {
+        group + "memory.limit_in_bytes": f"{64 << 20}\n",
+        group + "memory.usage_in_bytes": f"{20 << 20}\n",
+        "/sys/fs/cgroup/memory/memory.limit_in_bytes": f"{_V1_UNLIMITED}\n",
+    })  # fmt: skip
+    source, out = _map(tmp_path / "sky.exr"), tmp_path / "out" / "o.exr"
+    code = ("import sys; import envconv.engine.memory as m; m.SYSTEM_ROOT = sys.argv.pop(1); "
+            "from envconv.cli import main; main()")  # fmt: skip
+    argv = [sys.executable, "-c", code, root, "convert", str(source), str(out), "--to",
+            "cube-vcross", "--size", "1024"]  # fmt: skip
+    env = {k: v for k, v in os.environ.items() if k != "ENVCONV_MEMORY_LIMIT"}
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=120, env=env)
+    run = Run(argv, done.returncode, done.stdout, done.stderr)
+    assert_failed_cleanly(run, 1, tmp_path, message="of memory and")
+    assert "available" in run.stderr and not out.exists()

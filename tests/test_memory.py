@@ -199,3 +199,99 @@ def test_half_source_to_a_small_map_is_within_the_bound(sources):
     warm, peak = _measure(folder, tiny, half, "small.exr", {"to": "cube-vcross", "size": 64})
     read, written = _array_bytes(half, folder / "small.exr")
     assert peak - warm <= 1.25 * (read + written), (peak - warm, read, written)
+
+
+# --- the memory cgroups: v1 and v2, nested limits, read from a fake /proc and /sys tree -----
+
+_MIB = 1 << 20
+_V1_UNLIMITED = 9223372036854771712  # what the kernel reports for "no limit" (PAGE_COUNTER_MAX)
+
+
+def cgroup_tree(root, cgroup: str, mountinfo: str | None, files: dict[str, str]) -> str:
+    """A fake system under ``root``: /proc/self/cgroup, /proc/self/mountinfo (None: none,
+    the default mount points are used) and each ``files`` path (under /sys/fs/cgroup)."""
+    (root / "proc" / "self").mkdir(parents=True)
+    (root / "proc" / "self" / "cgroup").write_text(cgroup)
+    if mountinfo is not None:
+        (root / "proc" / "self" / "mountinfo").write_text(mountinfo)
+    (root / "proc" / "meminfo").write_text(f"MemTotal: 67108864 kB\nMemAvailable: {64 << 20} kB\n")
+    for path, text in files.items():
+        target = root / path.lstrip("/")
+        target.parent.mkdir(parents=True, exist_ok=True)
+        target.write_text(text)
+    return str(root)
+
+
+_V1_MOUNTS = (
+    "31 23 0:28 / /sys/fs/cgroup rw,relatime - tmpfs tmpfs rw,mode=755\n"
+    "32 31 0:29 / /sys/fs/cgroup/cpu rw,relatime - cgroup cgroup rw,cpu\n"
+    "35 31 0:32 {root} /sys/fs/cgroup/memory rw,relatime - cgroup cgroup rw,memory\n"
+    "41 31 0:38 / /sys/fs/cgroup/unified rw,relatime - cgroup2 cgroup2 rw\n"
+)
+
+
+def test_cgroup_v1_limit_less_the_working_set(tmp_path):
+    """A v1 memory cgroup (a host's service, an older Docker): limit 1 GiB, 600 MiB used of
+    which 100 MiB inactive page cache: 524 MiB left. The v2 hierarchy of the hybrid system
+    has no memory controller and says nothing."""
+    group = "/sys/fs/cgroup/memory/jobs/run7/"
+    root = cgroup_tree(tmp_path, "4:memory:/jobs/run7\n1:cpu:/\n0::/\n", _V1_MOUNTS.format(root="/"), {
+        group + "memory.limit_in_bytes": f"{1024 * _MIB}\n",
+        group + "memory.usage_in_bytes": f"{600 * _MIB}\n",
+        group + "memory.stat": f"cache 0\ntotal_inactive_file {100 * _MIB}\n"
+                               f"hierarchical_memory_limit {1024 * _MIB}\n",
+        "/sys/fs/cgroup/memory/memory.limit_in_bytes": f"{_V1_UNLIMITED}\n",
+        "/sys/fs/cgroup/memory/memory.usage_in_bytes": f"{5000 * _MIB}\n",
+    })  # fmt: skip
+    assert memory._cgroup_room(root) == 524 * _MIB
+
+
+def test_cgroup_v1_hierarchical_limits(tmp_path):
+    """The process's own group sets no limit; a visible parent does (1.5 GiB, 1.2 GiB used:
+    300 MiB left) and a hidden ancestor too (hierarchical_memory_limit 2 GiB over the leaf's
+    1 GiB used): the tightest, 300 MiB, counts. In a container the mount's root is the
+    container's group (no cgroup namespace), so the mount point is the process's group."""
+    base = "/sys/fs/cgroup/memory/"
+    root = cgroup_tree(tmp_path, "4:memory:/docker/abc/job\n", _V1_MOUNTS.format(root="/docker"), {
+        base + "abc/job/memory.limit_in_bytes": f"{_V1_UNLIMITED}\n",
+        base + "abc/job/memory.usage_in_bytes": f"{1024 * _MIB}\n",
+        base + "abc/job/memory.stat": f"hierarchical_memory_limit {2048 * _MIB}\n",
+        base + "abc/memory.limit_in_bytes": f"{1536 * _MIB}\n",
+        base + "abc/memory.usage_in_bytes": f"{1236 * _MIB}\n",
+    })  # fmt: skip
+    assert memory._cgroup_room(root) == 300 * _MIB
+    (tmp_path / "sys/fs/cgroup/memory/abc/memory.limit_in_bytes").write_text(f"{_V1_UNLIMITED}\n")
+    assert memory._cgroup_room(root) == 1024 * _MIB  # the hidden ancestor's limit alone
+
+
+def test_cgroup_v2_nested_and_default_mount(tmp_path):
+    """v2, no mountinfo (the default /sys/fs/cgroup): the group's memory.max is 'max', its
+    parent's 1 GiB with 200 MiB used, 50 MiB of it inactive page cache: 874 MiB left."""
+    base = "/sys/fs/cgroup/"
+    root = cgroup_tree(tmp_path, "0::/user.slice/app\n", None, {
+        base + "user.slice/app/memory.max": "max\n",
+        base + "user.slice/app/memory.current": f"{100 * _MIB}\n",
+        base + "user.slice/memory.max": f"{1024 * _MIB}\n",
+        base + "user.slice/memory.current": f"{200 * _MIB}\n",
+        base + "user.slice/memory.stat": f"anon 0\ninactive_file {50 * _MIB}\n",
+    })  # fmt: skip
+    assert memory._cgroup_room(root) == 874 * _MIB
+    (tmp_path / "sys/fs/cgroup/user.slice/memory.max").write_text("max\n")
+    assert memory._cgroup_room(root) is None  # no limit anywhere
+    assert memory._cgroup_room(str(tmp_path / "nowhere")) is None  # no cgroups at all
+
+
+def test_cgroup_room_of_this_machine():
+    """The real files, where this machine has them: None or the bytes left under a limit
+    that really is there (v2's memory.max or v1's limit_in_bytes of the process's group)."""
+    room = memory._cgroup_room()
+    limits = []
+    for version, folder, _ in memory._memory_cgroups(None):
+        name = "memory.max" if version == 2 else "memory.limit_in_bytes"
+        value = memory._read_number(f"{folder}/{name}")
+        if value is not None and value < 1 << 60:
+            limits.append(value)
+    if room is None:
+        assert not limits
+    else:
+        assert 0 <= room <= max(limits)

@@ -39,10 +39,12 @@ checks real conversions against it; docs/benchmarks.md lists measured ratios).
 The guard
 ---------
 :func:`check` compares an estimate with the memory available: ``ENVCONV_MEMORY_LIMIT`` (bytes,
-or with a K, M, G or T suffix) when set, else 80% (:data:`USABLE_SHARE`) of the smaller of
-Linux's ``MemAvailable``, the room left under the process's cgroup v2 ``memory.max`` and
-under ``ulimit -v``, else of ``sysconf(SC_AVPHYS_PAGES)`` (other Unixes); with none of them
-nothing is checked. Memory the run already holds (the source, when resampling) counts as
+or with a K, M, G or T suffix) when set, else 80% (:data:`USABLE_SHARE`) of the smallest of
+Linux's ``MemAvailable``, the room left under the tightest memory limit of the process's
+cgroup and its ancestors (v2's ``memory.max``, or v1's ``memory.limit_in_bytes`` and
+``hierarchical_memory_limit``, less the usage that page cache cannot give back:
+:func:`_cgroup_room`) and under ``ulimit -v``, else of ``sysconf(SC_AVPHYS_PAGES)`` (other
+Unixes); with none of them nothing is checked. Memory the run already holds (the source, when resampling) counts as
 available. A run that does not fit raises
 :class:`MemoryLimitError` (an :class:`envconv.errors.EnvconvError`: one line, exit 1) before
 allocating. :func:`envconv.io.read` checks the read phase from the header;
@@ -129,9 +131,21 @@ def _parse_bytes(text: str) -> int:
     return int(float(match.group(1)) * _UNITS[match.group(2).upper()])
 
 
-def _meminfo_available() -> int | None:
+#: Where the system's files (/proc, /sys/fs/cgroup) are read: "/" on a real machine; tests
+#: point it at a tree of their own.
+SYSTEM_ROOT = "/"
+#: A v1 memory limit at or above this is "no limit" (the kernel reports PAGE_COUNTER_MAX
+#: pages, 9223372036854771712 bytes on 64-bit Linux).
+_NO_LIMIT = 1 << 60
+
+
+def _system_path(path: str, root: str | None = None) -> str:
+    return os.path.join(root or SYSTEM_ROOT, path.lstrip("/"))
+
+
+def _meminfo_available(root: str | None = None) -> int | None:
     try:
-        with open("/proc/meminfo") as handle:
+        with open(_system_path("/proc/meminfo", root)) as handle:
             for line in handle:
                 if line.startswith("MemAvailable:"):
                     return int(line.split()[1]) * 1024
@@ -140,22 +154,120 @@ def _meminfo_available() -> int | None:
     return None
 
 
-def _cgroup_room() -> int | None:
-    """Bytes left under this process's cgroup v2 ``memory.max`` (None: no limit or no v2)."""
+def _cgroup_room(root: str | None = None) -> int | None:
+    """Bytes left under the tightest memory limit over this process's cgroup and the
+    ancestors it can see, in cgroup v2 and in the v1 memory controller (a hybrid system has
+    both); None when no limit applies or there are no cgroups.
+
+    A level's room is its limit less what it holds that the kernel cannot reclaim before the
+    OOM killer strikes: usage less the inactive page cache, as Docker and the kubelet count a
+    container's working set. v2 reads ``memory.max``, ``memory.current`` and ``memory.stat``'s
+    ``inactive_file``; v1 ``memory.limit_in_bytes``, ``memory.usage_in_bytes`` and
+    ``memory.stat``'s ``total_inactive_file`` and ``hierarchical_memory_limit`` (the limit of
+    ancestors hidden from a container).
+    """
+    rooms = []
+    for version, folder, top in _memory_cgroups(root):
+        for level in _ancestors(folder, top):
+            room = _level_room(version, level, leaf=level == folder)
+            if room is not None:
+                rooms.append(room)
+    return min(rooms) if rooms else None
+
+
+def _memory_cgroups(root: str | None) -> list[tuple[int, str, str]]:
+    """(version, folder of this process's cgroup, folder of the hierarchy's mount) for the
+    v2 hierarchy and the v1 memory controller, from /proc/self/cgroup and mountinfo."""
     try:
-        with open("/proc/self/cgroup") as handle:
-            path = next((line.strip()[3:] for line in handle if line.startswith("0::")), None)
-        if path is None:
-            return None
-        folder = os.path.join("/sys/fs/cgroup", path.lstrip("/"))
-        with open(os.path.join(folder, "memory.max")) as handle:
-            limit = handle.read().strip()
-        if limit == "max":
-            return None
-        with open(os.path.join(folder, "memory.current")) as handle:
-            return max(int(limit) - int(handle.read()), 0)
+        with open(_system_path("/proc/self/cgroup", root)) as handle:
+            lines = handle.read().splitlines()
+    except OSError:
+        return []
+    mounts = _cgroup_mounts(root)
+    found = []
+    for line in lines:
+        number, _, rest = line.partition(":")
+        controllers, _, path = rest.partition(":")
+        if number == "0" and not controllers:
+            version = 2
+        elif "memory" in controllers.split(","):
+            version = 1
+        else:
+            continue
+        default = "/sys/fs/cgroup" if version == 2 else "/sys/fs/cgroup/memory"
+        mount_root, mount_point = mounts.get(version, ("/", default))
+        inside = path[len(mount_root) :] if path.startswith(mount_root) else path
+        top = _system_path(mount_point, root)
+        folder = os.path.join(top, inside.lstrip("/"))
+        found.append((version, folder if os.path.isdir(folder) else top, top))
+    return found
+
+
+def _cgroup_mounts(root: str | None) -> dict[int, tuple[str, str]]:
+    """{version: (root of the hierarchy mounted, mount point)} from /proc/self/mountinfo."""
+    mounts: dict[int, tuple[str, str]] = {}
+    try:
+        with open(_system_path("/proc/self/mountinfo", root)) as handle:
+            lines = handle.read().splitlines()
+    except OSError:
+        return mounts
+    for (
+        line
+    ) in lines:  # ID PARENT MAJ:MIN ROOT MOUNT-POINT OPTIONS [OPTIONAL...] - TYPE SOURCE SUPER
+        fields = [f.replace("\\040", " ") for f in line.split()]
+        dash = fields.index("-", 6) if "-" in fields[6:] else len(fields)
+        after = fields[dash + 1 :] + ["", "", ""]
+        kind, super_options = after[0], after[2]
+        if kind == "cgroup2":
+            mounts.setdefault(2, (fields[3], fields[4]))
+        elif kind == "cgroup" and "memory" in super_options.split(","):
+            mounts.setdefault(1, (fields[3], fields[4]))
+    return mounts
+
+
+def _ancestors(folder: str, top: str) -> list[str]:
+    """``folder`` and its parents up to ``top``, the mount point, included."""
+    chain, top = [folder], os.path.normpath(top)
+    while os.path.normpath(chain[-1]) != top and os.path.dirname(chain[-1]) != chain[-1]:
+        chain.append(os.path.dirname(os.path.normpath(chain[-1])))
+    return chain
+
+
+def _level_room(version: int, folder: str, leaf: bool) -> int | None:
+    """Bytes left under one cgroup's own limit (see :func:`_cgroup_room`); None: no limit."""
+    if version == 2:
+        limit = _read_number(os.path.join(folder, "memory.max"))
+        usage = _read_number(os.path.join(folder, "memory.current"))
+    else:
+        limit = _read_number(os.path.join(folder, "memory.limit_in_bytes"))
+        usage = _read_number(os.path.join(folder, "memory.usage_in_bytes"))
+    stat = _read_stat(os.path.join(folder, "memory.stat"))
+    hierarchical = stat.get("hierarchical_memory_limit") if version == 1 and leaf else None
+    if hierarchical is not None:
+        limit = hierarchical if limit is None else min(limit, hierarchical)
+    if limit is None or usage is None or limit >= _NO_LIMIT:
+        return None
+    cache = stat.get("inactive_file" if version == 2 else "total_inactive_file", 0)
+    return max(limit - max(usage - cache, 0), 0)
+
+
+def _read_number(path: str) -> int | None:
+    """The integer in a cgroup file; None for ``max`` (no limit) or a file that is not there."""
+    try:
+        with open(path) as handle:
+            text = handle.read().strip()
+        return None if text == "max" else int(text)
     except (OSError, ValueError):
         return None
+
+
+def _read_stat(path: str) -> dict[str, int]:
+    try:
+        with open(path) as handle:
+            pairs = (line.split() for line in handle)
+            return {p[0]: int(p[1]) for p in pairs if len(p) == 2 and p[1].isdigit()}
+    except OSError:
+        return {}
 
 
 def _address_space_room() -> int | None:
