@@ -18,7 +18,7 @@ PACKAGE = Path(__file__).resolve().parent.parent / "envconv"
 
 #: Layers from the top (index 0) down; a module belongs to the first entry whose prefix names it.
 LAYERS = [
-    ("cli", ["envconv.cli"]),
+    ("cli", ["envconv.cli", "envconv.__main__"]),
     ("engine", ["envconv.engine"]),
     ("views", ["envconv.views"]),
     ("resample", ["envconv.resample"]),

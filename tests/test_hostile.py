@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import resource
 import signal
 import struct
@@ -1163,3 +1164,74 @@ def test_a_v1_memory_cgroup_limit_refuses_before_allocating(tmp_path):
     run = Run(argv, done.returncode, done.stdout, done.stderr)
     assert_failed_cleanly(run, 1, tmp_path, message="of memory and")
     assert "available" in run.stderr and not out.exists()
+
+
+def _before_envconv_ran(stderr: str) -> bool:
+    """A traceback of a signal that came while Python started or loaded the envconv package,
+    before envconv.__main__ could take SIGINT over (no frame of envconv's code in it): out of
+    any program's reach (docs/shell.md)."""
+    frames = re.findall(r'File "([^"]+)"', stderr)
+    ours = [f for f in frames if re.search(r"[/\\]envconv[/\\](?!__init__\.py|errors\.py)", f)]
+    return "KeyboardInterrupt" in stderr and not ours
+
+
+def test_sigint_at_any_early_moment_is_one_line_or_nothing(tmp_path):
+    """Ctrl-C in the first 50 ms (Python starting, click and the commands loading, the first
+    read) printed a KeyboardInterrupt traceback, or aborted with SIGABRT when it landed in
+    OpenImageIO's module initialisation. Now: exit 130 (or killed by SIGINT, before Python
+    took the signal over), nothing on stdout, at most the one line, never a temp."""
+    source = _noise_exr(tmp_path / "in.exr", 8)
+    early, handled = [], 0
+    for delay in [i / 1000 for i in range(0, 52, 4)] + [0.1, 0.2, 0.3, 0.5]:
+        process = _start("convert", source, tmp_path / "o.exr", "--to", "latlong", "--size", 64)
+        time.sleep(delay)
+        seconds, stdout, stderr = _signal_after(process, signal.SIGINT, lambda: True)
+        if _before_envconv_ran(stderr):
+            early.append(delay)
+            continue
+        assert "Traceback" not in stderr and "Fatal" not in stderr, (delay, stderr)
+        lines = [line for line in stderr.splitlines() if line.strip()]
+        if process.returncode == 0:  # the run ended before the signal: it is whole
+            assert stdout == f"{tmp_path / 'o.exr'}\n" and not lines, (delay, stderr)
+            continue
+        assert process.returncode in (130, -signal.SIGINT), (delay, process.returncode, stderr)
+        assert stdout == "" and lines in ([], ["envconv: error: interrupted (SIGINT)"]), (
+            delay,
+            stderr,
+        )
+        assert seconds < 2.0 and not litter(tmp_path), (delay, seconds)
+        handled += bool(lines)
+    assert handled, early  # some signals reached envconv, however slow the machine
+
+
+def test_kill_9_of_the_batch_parent_ends_its_workers_quietly(tmp_path):
+    """SIGKILL of ``envconv batch -j 2``: each worker finished its job for no one and printed
+    a BrokenPipeError traceback. Now they stop at once (SIGTERM from Linux at the parent's
+    death), print nothing and leave no temp."""
+    inputs, out = tmp_path / "in", tmp_path / "out"
+    inputs.mkdir()
+    for i in range(4):
+        _noise(inputs / f"sky{i}.exr", 32, seed=i)
+    process = _start("batch", inputs, "--out", out / "{stem}.exr", "-j", 2,
+                     "resample", "--to", "latlong", "--size", 1024, "--samples", 16)  # fmt: skip
+    try:
+        workers = _wait_for(
+            lambda: len(_worker_pids(process.pid)) == 2 and _worker_pids(process.pid)
+        )
+        time.sleep(1.0)  # both in their first job's kernel
+        os.kill(process.pid, signal.SIGKILL)
+        killed = time.monotonic()
+        stdout, stderr = process.communicate(timeout=60)  # EOF: every worker closed stderr
+    finally:
+        if process.poll() is None:
+            os.killpg(process.pid, signal.SIGKILL)
+            process.communicate()
+    assert time.monotonic() - killed < 5.0  # not the rest of a job at size 1024, S = 16
+    assert stdout == "" and stderr == "", stderr
+    for pid in workers:
+        try:
+            state = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        assert state == "Z", (pid, state)  # ended (a zombie until init reaps it)
+    assert not litter(tmp_path)

@@ -250,20 +250,23 @@ BLAS_THREADS = ("OPENBLAS_NUM_THREADS", "1")
 
 
 def main() -> None:
-    """Console-script entry point."""
-    import warnings
+    """Console-script entry point (reached through :mod:`envconv.__main__`, which installs
+    the signal handlers before this module loads)."""
+    from ..engine.interrupt import closing, install
 
-    os.environ.setdefault(*BLAS_THREADS)
-
-    from ..engine.interrupt import install
-    from .messages import show_warning
-
-    warnings.showwarning = show_warning  # a Python warning is one line too
-    install()
     try:
+        install()  # once: already done when started as the console script
+        os.environ.setdefault(*BLAS_THREADS)
+        import warnings
+
+        from .messages import show_warning
+
+        warnings.showwarning = show_warning  # a Python warning is one line too
         cli.main(prog_name="envconv", standalone_mode=True)
     except KeyboardInterrupt as exc:  # before or after a command ran
         _interrupted(exc)
+    finally:
+        closing()  # the run is over: a late signal no longer breaks the interpreter's ending
 
 
 if __name__ == "__main__":  # pragma: no cover

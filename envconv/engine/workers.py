@@ -14,6 +14,9 @@ contained.
   :class:`WorkerStartError`, one line saying why. What a worker writes on stderr goes through
   this process (:class:`_Stderr`): kept until the worker is ready, so that its last line gives
   the cause instead of a traceback per worker on the terminal, and passed on after.
+* A worker whose parent dies (``kill -9`` of ``envconv batch``) gets SIGTERM from Linux
+  (:func:`envconv.engine.interrupt.die_with_parent`) and ends quietly, its temporary file
+  removed; elsewhere it ends at its next message to the dead parent, as quietly.
 * SIGINT/SIGTERM in this process (:mod:`envconv.engine.interrupt`) stops handing out jobs, sends
   SIGTERM to the workers (which remove their temporary files and exit; they ignore SIGINT,
   so the terminal's Ctrl-C reaches them only through this process), kills any that have not
@@ -112,13 +115,21 @@ def _write_all(fd: int, data: bytes) -> None:
 
 def _worker_main(conn, call, init) -> None:
     """A worker: ``init()``, then run ``call(job)`` for each (index, job) received and send
-    back (index, record)."""
-    from .interrupt import install
+    back (index, record). Its parent gone (``kill -9``: SIGTERM by :func:`die_with_parent`,
+    or a closed pipe), it ends quietly: no one is left to report to."""
+    import multiprocessing
 
-    install(sigint=False, quiet=True)
-    init()
-    conn.send((_READY, os.getpid()))
+    from .interrupt import die_with_parent, install
+
     try:
+        install(sigint=False, quiet=True)
+        parent = multiprocessing.parent_process()
+        die_with_parent(parent.pid if parent is not None else None)
+        init()
+        try:
+            conn.send((_READY, os.getpid()))
+        except OSError:  # the parent died while this worker started
+            return
         while True:
             try:
                 message = conn.recv()
@@ -127,8 +138,12 @@ def _worker_main(conn, call, init) -> None:
             if message is None:
                 return
             index, job = message
-            conn.send((index, call(job)))
-    except KeyboardInterrupt:  # SIGTERM from the parent: the writes have removed their temps
+            record = call(job)
+            try:
+                conn.send((index, record))
+            except OSError:  # BrokenPipeError: the parent died while the job ran
+                return
+    except KeyboardInterrupt:  # SIGTERM from the parent or at its death: temps are removed
         os._exit(128 + signal.SIGTERM)
 
 
