@@ -1,39 +1,44 @@
 """``envconv`` as a program: the console script and ``python -m envconv``.
 
 The console script imports this module, not :mod:`envconv.cli`, so that SIGINT and SIGTERM
-are in envconv's hands (:mod:`envconv.engine.interrupt`) before click, numpy and the commands
-load, which takes tens of milliseconds: a Ctrl-C at any moment from here on ends the run with
-one line and status 130 (143 for SIGTERM), never a ``KeyboardInterrupt`` traceback. Until the
-handlers are installed, a signal is only recorded, then raised by them.
+are in envconv's hands before click, numpy and the commands load, which takes tens of
+milliseconds: a Ctrl-C at any moment from here on ends the run with one line and status 130
+(143 for SIGTERM), never a ``KeyboardInterrupt`` traceback. Importing this module records
+the two signals at once (through ``_signal``, the C half of :mod:`signal`, which loads in
+microseconds where :mod:`signal` takes milliseconds to build its enums); :func:`main` hands
+them to :mod:`envconv.engine.interrupt` and raises any that came meanwhile. So this module is
+the program only: a library never imports it.
 
-A signal that lands while Python itself starts (its ``site`` module, the first few
-milliseconds, before any envconv code runs) is Python's to report: it prints "Fatal Python
-error: init_import_site" and exits 1, whatever the program.
+A signal that lands while Python itself starts (its ``site`` module) or loads the package's
+``__init__``, the first few milliseconds, comes before any of this and is Python's to report.
 """
 
 from __future__ import annotations
 
-import signal
+import _signal
 import sys
 
 __all__ = ["main"]
 
+_pending: list[int] = []
+
+
+def _record(signum, frame) -> None:
+    _pending.append(signum)
+
+
+_previous = {s: _signal.signal(s, _record) for s in (_signal.SIGINT, _signal.SIGTERM)}
+
 
 def main() -> None:
     """Run the ``envconv`` command line (:func:`envconv.cli.main.main`)."""
-    pending: list[int] = []
-
-    def record(signum, frame) -> None:
-        pending.append(signum)
-
-    previous = {s: signal.signal(s, record) for s in (signal.SIGINT, signal.SIGTERM)}
     from .engine.interrupt import install, report
 
     try:
         install()
-        for signum in pending[:1]:
-            if previous.get(signum) is not signal.SIG_IGN:
-                signal.raise_signal(signum)  # now raised as envconv.engine.interrupt's
+        for signum in _pending[:1]:
+            if _previous.get(signum) != _signal.SIG_IGN:
+                _signal.raise_signal(signum)  # now raised as envconv.engine.interrupt's
         from .cli.main import main as command_line
 
         command_line()

@@ -9,7 +9,17 @@ import warnings
 import pytest
 
 from envconv.errors import ImageIOError, UsageError
+from envconv.io import chatter
 from envconv.io.chatter import library_output, meaningful_lines
+
+
+@pytest.fixture(autouse=True)
+def captured():
+    """Captures redirect only where the command line turned them on: these tests are about
+    what it then catches (test_library_calls_leave_the_descriptors_alone is about the rest)."""
+    previous = chatter.capture_descriptors(True)
+    yield
+    chatter.capture_descriptors(previous)
 
 
 def test_descriptor_output_is_caught_and_logged_at_debug(capfd, caplog):

@@ -140,6 +140,52 @@ def test_threads_come_from_the_environment(monkeypatch):
     kernels.set_threads(previous)
 
 
+def test_thread_counts_are_per_call_and_per_thread(noisy_sky, monkeypatch):
+    """Two threads convert at once with threads=1 and threads=3, a third with none: each
+    kernel call of each thread uses its own count (the process setting for the third), and
+    the bytes are those of a one-thread run. (set_threads, a process global, was the only
+    dial: a Dask worker's two threads changed each other's count.)"""
+    import threading
+
+    seen: dict[str, set[int]] = {}
+    both_inside = threading.Barrier(3, timeout=30)
+    resolve = kernels.get_threads
+
+    def recording(threads=None):
+        count = resolve(threads)
+        name = threading.current_thread().name
+        if name not in seen:
+            seen[name] = set()
+            both_inside.wait()  # every thread is inside convert before any goes on
+        seen[name].add(count)
+        return count
+
+    monkeypatch.setattr(kernels, "get_threads", recording)
+    previous = kernels.set_threads(2)
+    results = {}
+
+    def run(name, threads):
+        results[name] = envconv.convert(noisy_sky, "cube-vcross", size=24, threads=threads)
+
+    try:
+        workers = [threading.Thread(target=run, args=(name, n), name=name)
+                   for name, n in (("one", 1), ("three", 3), ("default", None))]  # fmt: skip
+        for worker in workers:
+            worker.start()
+        for worker in workers:
+            worker.join(60)
+    finally:
+        kernels.set_threads(previous)
+    assert seen == {"one": {1}, "three": {3}, "default": {2}}
+    monkeypatch.setattr(kernels, "get_threads", resolve)
+    reference = envconv.convert(noisy_sky, "cube-vcross", size=24, threads=1)
+    assert all(r.pixels.tobytes() == reference.pixels.tobytes() for r in results.values())
+    with kernels.threads_for(5):
+        assert kernels.get_threads() == 5 and kernels.get_threads(2) == 2
+    with pytest.raises(envconv.UsageError, match="threads"):
+        envconv.convert(noisy_sky, "latlong", size=4, threads=0)
+
+
 def test_a_progress_watcher_sees_every_band_and_the_pixels_do_not_change(noisy_sky):
     seen = []
     plain = envconv.convert(noisy_sky, "cube-vcross", size=64)

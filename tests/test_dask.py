@@ -1,4 +1,6 @@
-"""``envconv batch --dask``: the same jobs on a two-worker LocalCluster, the same report.
+"""``envconv batch --dask``: the same jobs on a LocalCluster of two worker processes with two
+threads each (two jobs at once in one process: their thread counts and output must not mix),
+the same report.
 
 Truth: the local run's report and progress lines (timings removed), and ``envconv.convert``.
 """
@@ -34,7 +36,7 @@ def inputs(tmp_path_factory):
 @pytest.fixture(scope="module")
 def cluster():
     with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+        n_workers=2, threads_per_worker=2, processes=True, dashboard_address=None
     ) as local:
         yield local
 

@@ -218,6 +218,12 @@ def cli(verbose: int, threads: int | None) -> None:
         # "envconv: warning: …" whether a message comes from the library's log or the CLI.
         logging.addLevelName(number, logging.getLevelName(number).lower())
     logging.basicConfig(level=level, format="envconv: %(levelname)s: %(message)s")
+    from ..io.chatter import capture_descriptors
+
+    # This process is the command line's: what the image libraries print may be captured
+    # (folded into errors, kept off stdout) for the command's length (envconv.io.chatter).
+    previous = capture_descriptors(True)
+    click.get_current_context().call_on_close(lambda: capture_descriptors(previous))
     if threads is not None:
         from ..resample.kernels import set_threads
 

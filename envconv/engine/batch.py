@@ -192,20 +192,25 @@ def worker_threads(jobs: int, cores: int | None = None) -> int:
     return max(1, (cores or 1) // max(1, jobs))
 
 
-def _init_worker(threads: int) -> None:
+def _init_worker(threads: int, capture: bool = False) -> None:
+    """A worker process of this batch: its share of the cores, and the capture of library
+    output when the command line that started it captures (:mod:`envconv.io.chatter`)."""
+    from ..io.chatter import capture_descriptors
     from ..io.files import limit_threads
     from ..resample.kernels import set_threads
 
     limit_threads(threads)
     set_threads(threads)
+    capture_descriptors(capture)
 
 
 def _run_job_on_dask_worker(job: Job, mode: str = "all") -> dict[str, Any]:
-    """:func:`run_job` on one kernel thread: the Dask worker runs one job per thread."""
-    from ..resample.kernels import set_threads
+    """:func:`run_job` on one kernel thread: the Dask worker runs one job per thread, and
+    its other threads keep their own count (a per-call count, not the process's)."""
+    from ..resample.kernels import threads_for
 
-    set_threads(1)
-    return run_job(job, mode)
+    with threads_for(1):
+        return run_job(job, mode)
 
 
 def _input_mtime(job: Job) -> float:
@@ -328,10 +333,11 @@ def run_batch(
 def _run_processes(jobs: list[Job], workers: int, mode: str, finish) -> list[str]:
     from functools import partial
 
+    from ..io.chatter import capturing
     from .workers import run_pool
 
     return run_pool(jobs, workers, finish, call=partial(run_job, mode=mode),
-                    init=partial(_init_worker, worker_threads(workers)),
+                    init=partial(_init_worker, worker_threads(workers), capturing()),
                     failed=_failed, outputs=_output_files)  # fmt: skip
 
 

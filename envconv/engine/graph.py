@@ -70,13 +70,14 @@ def _signature_keys(fn, *skip: str) -> set[str]:
 
 
 def _step_keys() -> dict[str, set[str]]:
-    # Derived from the library signatures, so options added there are accepted here too.
+    # Derived from the library signatures, so options added there are accepted here too;
+    # ``threads`` is the run's setting (ENVCONV_THREADS, --threads), not the recipe's.
     return {
-        "read": {"path"} | _signature_keys(io.read, "path") | set(PREPARE_OPTIONS),
+        "read": {"path"} | _signature_keys(io.read, "path", "threads") | set(PREPARE_OPTIONS),
         "rotate": {"angles", "yaw", "pitch", "roll"},
         "exposure": {"stops"},
         "colorspace": {"dst", "src", "config"},
-        "resample": _signature_keys(convert, "envmap"),
+        "resample": _signature_keys(convert, "envmap", "threads"),
         "write": {"path", "makedirs", "preview", "no_clobber"}
         | _signature_keys(io.write, "envmap", "path", "warnings"),
     }

@@ -18,28 +18,36 @@ writes to descriptor 2 too) are passed on to stderr as they are.
 
 Text that bindings print through Python's ``sys.stdout``/``sys.stderr`` (OpenEXR's module
 prints its pixel-read warning so) and Python warnings raised meanwhile (numpy's) are caught
-the same way. Captures nest, and threads
-share one: only the outermost redirects the descriptors (they belong to the process).
-Capturing is skipped when the descriptors cannot be duplicated (closed streams).
+the same way.
+
+Only where envconv owns the process
+    Descriptors, ``sys.stdout`` and warning filters belong to the whole process: redirecting
+    them from a library call would swallow what the caller's other threads print (a Dask
+    worker runs several tasks at once) and race with their own captures. So a capture
+    redirects nothing unless the command line has turned capturing on
+    (:func:`capture_descriptors`, for its main thread; the batch workers it starts inherit
+    the setting). A library caller's process is never touched: errors come from OpenImageIO's
+    own ``geterror()``/``has_error`` (each call site checks them), ``MemoryError`` still
+    becomes an ``ImageIOError``, and what the C++ libraries print reaches the caller's stderr
+    as it would without envconv. Captures nest: only the outermost redirects.
 """
 
 from __future__ import annotations
 
 import atexit
-import ctypes
 import functools
 import io
 import logging
 import os
 import sys
-import tempfile
 import threading
 import warnings
 from contextlib import ExitStack, contextmanager, redirect_stderr, redirect_stdout
 
 from ..errors import EnvconvError, ImageIOError
 
-__all__ = ["library_output", "Caught", "meaningful_lines", "fold"]
+__all__ = ["library_output", "Caught", "meaningful_lines", "fold", "capture_descriptors",
+           "capturing"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -49,6 +57,21 @@ _LOCK = threading.Lock()
 _DEPTH = 0
 #: At most this much caught output is kept (a library in a loop must not fill the disk or RAM).
 _KEEP_BYTES = 64 * 1024
+#: Whether captures redirect the process's descriptors (see the module docstring).
+_CAPTURE = {"on": False}
+
+
+def capture_descriptors(on: bool = True) -> bool:
+    """Let captures redirect descriptors 1 and 2 (and ``sys.stdout``, ``sys.stderr``, the
+    warning filters) in this process's main thread: the command line's choice, for a process
+    it owns. Returns the previous setting."""
+    previous, _CAPTURE["on"] = _CAPTURE["on"], bool(on)
+    return previous
+
+
+def capturing() -> bool:
+    """Whether a capture starting now, in this thread, redirects the descriptors."""
+    return _CAPTURE["on"] and threading.current_thread() is threading.main_thread()
 
 
 class Caught:
@@ -97,6 +120,8 @@ def _flush_c_stdio() -> None:
 
 @functools.cache
 def _c_fflush():
+    import ctypes
+
     try:
         return ctypes.CDLL(None).fflush
     except (OSError, AttributeError, TypeError):  # no C library by that name (Windows)
@@ -154,6 +179,8 @@ def _sink():
     """This process's capture file, emptied: an unlinked temporary file (never litter), made
     once per process (a forked batch worker makes its own; 0.3 ms saved per file read)."""
     global _SINK
+    import tempfile
+
     if _SINK is None or _SINK[0] != os.getpid():
         _SINK = (os.getpid(), tempfile.TemporaryFile(buffering=0))
         atexit.register(_SINK[1].close)
@@ -175,7 +202,8 @@ def _read_back(sink) -> str:
 
 @contextmanager
 def library_output(what: str, path: str | os.PathLike | None = None):
-    """Capture library output while the block runs (see the module docstring).
+    """Capture library output while the block runs, where the command line has turned
+    capturing on (see the module docstring); elsewhere only fold ``MemoryError``.
 
     Parameters
     ----------
@@ -191,6 +219,15 @@ def library_output(what: str, path: str | os.PathLike | None = None):
     """
     caught = Caught()
     name = os.fspath(path) if path is not None else None
+    if not capturing():  # a library caller's process: nothing of it is touched
+        try:
+            yield caught
+        except BaseException as exc:
+            folded = fold(exc, what, caught, name)
+            if folded is exc:
+                raise
+            raise folded from exc
+        return
     failure = None
     python_text = io.StringIO()  # bindings that print through Python (OpenEXR's py::print)
     with _redirected() as (sink, outer), ExitStack() as streams:

@@ -27,10 +27,34 @@ declines, or fails to decode, is read by OIIO, which also reports the errors.
 from __future__ import annotations
 
 import os
+import threading
+from contextlib import contextmanager
 
 import numpy as np
 
 __all__ = ["is_plain_exr", "read_exr_pixels"]
+
+
+#: Decodes by OpenEXR in flight in this process (any thread), and its lock: the pool is a
+#: process global, resized only when no decode is using it.
+_decoding = {"count": 0}
+_decoding_lock = threading.Lock()
+
+
+@contextmanager
+def _openexr_pool(compression: str):
+    """Size OpenEXR's pool for ``compression`` (:func:`_set_openexr_threads`) unless another
+    thread is decoding with it (a Dask worker reading two files at once): then the decode
+    takes the pool as it is, which changes its speed, never its pixels."""
+    with _decoding_lock:
+        if _decoding["count"] == 0:
+            _set_openexr_threads(compression)
+        _decoding["count"] += 1
+    try:
+        yield
+    finally:
+        with _decoding_lock:
+            _decoding["count"] -= 1
 
 
 def _set_openexr_threads(compression: str) -> None:
@@ -70,11 +94,17 @@ def read_exr_pixels(path: str, spec):
     """Pixels (H, W, C) float32 of a plain scanline EXR's data window (:func:`is_plain_exr`),
     in ``spec``'s channel order, decoded by the OpenEXR library. None when it declines or fails (subsampled
     channels, a damaged file): then OIIO reads the file, or says why it cannot."""
+
+    with _openexr_pool(spec.get_string_attribute("compression", "zip")):
+        return _decode(path, spec)
+
+
+def _decode(path: str, spec):
+    """:func:`read_exr_pixels` with OpenEXR's pool sized."""
     import OpenEXR
 
     names = list(spec.channelnames)
     grouped = names in (["R", "G", "B"], ["R", "G", "B", "A"])
-    _set_openexr_threads(spec.get_string_attribute("compression", "zip"))
     if any(str(f) == "half" for f in (spec.channelformats or [spec.format])):
         return _read_half_bands(path, spec, names)
     try:

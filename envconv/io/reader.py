@@ -51,6 +51,7 @@ def read(
     ocio_config: str | os.PathLike | None = None,
     part: str | None = None,
     faces: str | None = None,
+    threads: int | None = None,
 ) -> EnvMap:
     """Read an environment map, in scene-linear float32 (linear Rec.709).
 
@@ -75,6 +76,11 @@ def read(
         ``threejs``, ``godot``, ``unreal``, ``envconv``; see :mod:`envconv.layouts.facesets`). Each
         file is turned into envconv's face, so the result is an ordinary ``cube-faces`` map.
         Default: found from the file names; several matching sets are a LayoutError.
+    threads : int, optional
+        Threads of the native core for this call (layout detection, an edge-aligned lat-long
+        resampled onto pixel centres); default: the process setting
+        (:func:`envconv.resample.kernels.set_threads`). OpenImageIO's and OpenEXR's own
+        decoding threads are process settings: their Python APIs take no count per file.
 
     The map is the file's display window (:mod:`envconv.io.files`). Where the data window
     leaves holes, every channel is 0 there, an alpha channel ``A`` (1 elsewhere) is added
@@ -83,6 +89,14 @@ def read(
     samples (``oiio:sampleborder``, as OpenEXR envmaps written by other tools) is resampled
     onto pixel centres (:func:`resample_edge_aligned`).
     """
+    from ..resample.kernels import threads_for
+
+    with threads_for(threads):
+        return _read(path, layout, level, input_colorspace, ocio_config, part, faces)
+
+
+def _read(path, layout, level, input_colorspace, ocio_config, part, faces) -> EnvMap:
+    """:func:`read` with the kernel threads chosen."""
     from ..color.ocio import to_working
 
     path = os.fspath(path)

@@ -93,6 +93,7 @@ def convert(
     yaw: float | None = None,
     pitch: float | None = None,
     roll: float | None = None,
+    threads: int | None = None,
 ) -> EnvMap:
     """Resample ``envmap`` into layout ``to``.
 
@@ -144,6 +145,9 @@ def convert(
         a perspective view's horizontal angle or ``"H,V"``, 90 by default); ``yaw`` turns the
         view right, ``pitch`` raises it, ``roll`` banks it right (an aircraft's angles, as
         ffmpeg v360's). Other layouts refuse them.
+    threads : int, optional
+        Threads of the native core for this call (default: the process setting,
+        :func:`envconv.resample.kernels.set_threads`); other threads' calls keep their own.
 
     Returns
     -------
@@ -163,15 +167,16 @@ def convert(
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
     _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
-    if envmap.layout.partial:
-        from .partial import pad_partial
+    with kernels.threads_for(threads):
+        if envmap.layout.partial:
+            from .partial import pad_partial
 
-        envmap = pad_partial(envmap)
-    if envmap.valid is not None or envmap.parts:
-        from .holes import convert_with_holes
+            envmap = pad_partial(envmap)
+        if envmap.valid is not None or envmap.parts:
+            from .holes import convert_with_holes
 
-        return convert_with_holes(envmap, to, _resample, **options)
-    return _resample(envmap, to, **options)
+            return convert_with_holes(envmap, to, _resample, **options)
+        return _resample(envmap, to, **options)
 
 
 def _resample(

@@ -8,24 +8,30 @@ N_x is a cell's width without guard) and the int32 tables cell → face, cell �
 face → cell. Image points are level-0 pixels, x right and y down; pixel
 (i, j) spans [i, i+1) × [j, j+1).
 
-Threads: one per core by default (the CPUs this process may run on); ``ENVCONV_THREADS`` or
-:func:`set_threads` (the CLI's ``--threads``) choose another count, and batch and Dask workers,
-which already run one file per core, use 1. Every task writes only its own output rows, so the
-bytes do not depend on the thread count.
+Threads: every wrapper takes ``threads``, the count for that call. Left out, it is the count of
+the enclosing :func:`threads_for` block in this thread (``envconv.convert(..., threads=2)``
+runs all its kernels so), else the process setting: one per core by default (the CPUs this
+process may run on), ``ENVCONV_THREADS`` or :func:`set_threads` (the CLI's ``--threads``; a
+batch worker process's share). A per-call count never changes what other threads use, so two
+threads of one process (a Dask worker's) may ask for different counts. Every task writes only
+its own output rows, so the bytes do not depend on the thread count.
 """
 
 from __future__ import annotations
 
 import os
 import threading
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 
 import numpy as np
 
 from .. import _core
+from ..limits import MAX_THREADS, check_threads
 
 __all__ = [
-    "get_threads", "set_threads", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
+    "get_threads", "set_threads", "threads_for", "watch_progress", "resample_rows", "build_rips", "rip_level_count", "rip_offset",
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
     "ibl_pyramid", "ibl_pyramid_binned", "ibl_pyramid_binned_any", "ibl_prefilter", "sh_project",
@@ -71,7 +77,7 @@ def _default_threads() -> int:
     value = os.environ.get("ENVCONV_THREADS", "").strip()
     if value:
         try:
-            return max(1, int(value))
+            return min(max(1, int(value)), MAX_THREADS)
         except ValueError:
             pass
     try:
@@ -81,19 +87,40 @@ def _default_threads() -> int:
 
 
 _threads = _default_threads()
+#: The count of the enclosing :func:`threads_for` block: per thread (and per asyncio task).
+_call_threads: ContextVar[int | None] = ContextVar("envconv_threads", default=None)
 
 
-def get_threads() -> int:
-    """Threads each kernel call uses."""
-    return _threads
+def get_threads(threads: int | None = None) -> int:
+    """Threads a kernel call uses: ``threads`` when given, else the enclosing
+    :func:`threads_for`'s count in this thread, else the process setting."""
+    if threads is not None:
+        return check_threads(threads)
+    count = _call_threads.get()
+    return _threads if count is None else count
 
 
 def set_threads(count: int | None) -> int:
-    """Use ``count`` threads per kernel call (None: the default); returns the previous count."""
+    """Set the process's count (None: the default; held to 1 … MAX_THREADS) for calls that
+    give none; returns the previous one. For one call or one thread, pass ``threads`` or use :func:`threads_for`."""
     global _threads
     previous = _threads
-    _threads = _default_threads() if count is None else max(1, int(count))
+    _threads = _default_threads() if count is None else min(max(1, int(count)), MAX_THREADS)
     return previous
+
+
+@contextmanager
+def threads_for(count: int | None) -> Iterator[None]:
+    """Run the block's kernel calls, in this thread only, on ``count`` threads (None: as
+    before the block)."""
+    if count is None:
+        yield
+        return
+    token = _call_threads.set(check_threads(count))
+    try:
+        yield
+    finally:
+        _call_threads.reset(token)
 
 
 #: Called as ``watcher(done, total)`` with the bands of output rows finished, about 5 times a
@@ -169,7 +196,7 @@ def _geo(geometry):
 
 def resample_rows(
     src, rip, rip_levels, rip_rows, sgeometry, dgeometry, scale_x, scale_y, samples, filt, rot,
-    fill, out, alpha=None, weights=None, zeroed=False, coverage_channel=False,
+    fill, out, alpha=None, weights=None, zeroed=False, coverage_channel=False, threads=None,
 ):  # fmt: skip
     """Fill ``out`` (H, W, C float32) with ``src`` resampled; see :mod:`envconv.resample.convert`.
 
@@ -189,7 +216,7 @@ def resample_rows(
     args = (
         _c(src, np.float32), _c(rip, np.float32), int(rip_levels), int(rip_rows),
         *_geo(sgeometry), *_geo(dgeometry), float(scale_x), float(scale_y), int(samples),
-        int(filt), _c(rot, np.float64), bool(fill), out, alpha, weights, _threads,
+        int(filt), _c(rot, np.float64), bool(fill), out, alpha, weights, get_threads(threads),
     )  # fmt: skip
     bands = (out.shape[0] + TILE - 1) // TILE
     _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed),
@@ -214,7 +241,8 @@ def rip_offset(width: int, level: int) -> int:
     return width - 2 * (width >> level)
 
 
-def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None = None):
+def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None = None,
+               threads: int | None = None):  # fmt: skip
     """(packed levels, K) of a lat-long ``src`` (H, W, C) float32's horizontal rip-map.
 
     Level k (k ≥ 1) averages 2^k texels along x and none along y; levels 1 … K sit side by
@@ -230,45 +258,47 @@ def build_rips(src: np.ndarray, rows: int | None = None, out: np.ndarray | None 
         return np.zeros((1, 1, nch), np.float32), 0
     if out is None:
         out = np.empty((height, width - (width >> levels), nch), np.float32)
-    _core.fill_rips(src, levels, height if rows is None else int(rows), out, _threads)
+    rows = height if rows is None else int(rows)
+    _core.fill_rips(src, levels, rows, out, get_threads(threads))
     return out, levels
 
 
-def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout) -> None:
+def reduce_blocks(src, wsrc, asrc, bx, by, out, wout, aout, threads=None) -> None:
     """Weighted means of bx × by blocks of ``src`` with weights ``wsrc``: ``out`` (h, w, C),
     the blocks' weight sums ``wout`` and mean coverages ``aout`` (``asrc`` and ``aout`` both
     None: no coverage)."""
     _core.reduce_blocks(
         _c(src, np.float32), _c(wsrc, np.float32), None if asrc is None else _c(asrc, np.float32),
         int(bx), int(by), out,
-        wout, aout, _threads,
+        wout, aout, get_threads(threads),
     )  # fmt: skip
 
 
-def map_points_to_dirs(geometry, points, fill=False):
+def map_points_to_dirs(geometry, points, fill=False, threads=None):
     """(dirs (n, 3), flags (n,) int8) of level-0 image points (n, 2): flags 2 in the valid
     region, 1 in a guard ring (or anywhere with ``fill``), 0 no data (dirs 0 there)."""
     points = _c(points, np.float64).reshape(-1, 2)
     dirs = np.empty((points.shape[0], 3))
     flags = np.empty(points.shape[0], np.int8)
-    _core.map_points_to_dirs(*_geo(geometry), points, bool(fill), dirs, flags, _threads)
+    _core.map_points_to_dirs(*_geo(geometry), points, bool(fill), dirs, flags,
+                             get_threads(threads))  # fmt: skip
     return dirs, flags
 
 
-def map_dirs_to_points(geometry, dirs) -> np.ndarray:
+def map_dirs_to_points(geometry, dirs, threads=None) -> np.ndarray:
     """Level-0 image points (n, 2) of unit directions (n, 3)."""
     dirs = _c(dirs, np.float64).reshape(-1, 3)
     points = np.empty((dirs.shape[0], 2))
-    _core.map_dirs_to_points(*_geo(geometry), dirs, points, _threads)
+    _core.map_dirs_to_points(*_geo(geometry), dirs, points, get_threads(threads))
     return points
 
 
-def pixel_solid_angles(geometry, scale_x, scale_y, samples, shape) -> np.ndarray:
+def pixel_solid_angles(geometry, scale_x, scale_y, samples, shape, threads=None) -> np.ndarray:
     """Solid angle (sr) of the valid part of every pixel of an image of ``shape`` (H, W) whose
     pixels are ``scale_x`` × ``scale_y`` level-0 pixels, by S × S sub-samples."""
     out = np.empty(shape)
     _core.pixel_solid_angles(
-        *_geo(geometry), float(scale_x), float(scale_y), int(samples), out, _threads
+        *_geo(geometry), float(scale_x), float(scale_y), int(samples), out, get_threads(threads)
     )
     return out
 
@@ -357,18 +387,18 @@ def _pyramid_buffer(p: int, nch: int) -> np.ndarray:
     return np.empty(_core.ibl_pyramid_floats(int(p), int(nch)), np.float32)
 
 
-def ibl_pyramid(faces: np.ndarray) -> np.ndarray:
+def ibl_pyramid(faces: np.ndarray, threads: int | None = None) -> np.ndarray:
     """The GGX prefilter's pyramid of a cube's six faces (6, p, p, C) float32, p a power of
     two: every level's texel moments, packed as src/core/ibl.h describes."""
     faces = _c(faces, np.float32)
     p, nch = faces.shape[1], faces.shape[3]
     pyramid = _pyramid_buffer(p, nch)
-    _core.ibl_pyramid(faces, pyramid, _threads)
+    _core.ibl_pyramid(faces, pyramid, get_threads(threads))
     return pyramid
 
 
 def ibl_pyramid_binned(
-    latlong: np.ndarray, to_pyramid: np.ndarray, p: int, sub: int = 1
+    latlong: np.ndarray, to_pyramid: np.ndarray, p: int, sub: int = 1, threads: int | None = None
 ) -> np.ndarray | None:
     """:func:`ibl_pyramid` of a p-cube made by binning every pixel of a lat-long (H, 2H, C)
     float32 (no guard ring), as ``sub`` × ``sub`` points, into the level-0 texel of its
@@ -379,12 +409,18 @@ def ibl_pyramid_binned(
     nch = latlong.shape[2]
     pyramid = _pyramid_buffer(p, nch)
     done = _core.ibl_pyramid_binned(latlong, _c(to_pyramid, np.float64), int(p), int(sub),
-                                    pyramid, _threads)  # fmt: skip
+                                    pyramid, get_threads(threads))  # fmt: skip
     return pyramid if done else None
 
 
 def ibl_pyramid_binned_any(
-    pixels: np.ndarray, geometry, to_pyramid: np.ndarray, p: int, sub: int, delta: float
+    pixels: np.ndarray,
+    geometry,
+    to_pyramid: np.ndarray,
+    p: int,
+    sub: int,
+    delta: float,
+    threads: int | None = None,
 ) -> np.ndarray | None:
     """:func:`ibl_pyramid_binned` for a map of any layout (``geometry`` from
     :func:`envconv.layouts.geometry.kernel_geometry`): each owned pixel as ``sub`` × ``sub`` points
@@ -394,26 +430,28 @@ def ibl_pyramid_binned_any(
     nch = pixels.shape[2]
     pyramid = _pyramid_buffer(p, nch)
     done = _core.ibl_pyramid_binned_any(pixels, *_geo(geometry), _c(to_pyramid, np.float64),
-                                        int(p), int(sub), float(delta), pyramid, _threads)  # fmt: skip
+                                        int(p), int(sub), float(delta), pyramid,
+                                        get_threads(threads))  # fmt: skip
     return pyramid if done else None
 
 
 def ibl_prefilter(pyramid, p, nch, geometry, scale_x, scale_y, alpha, samples, rot, fill, tau,
-                  out) -> None:  # fmt: skip
+                  out, threads=None) -> None:  # fmt: skip
     """Fill ``out`` (H, W, C) with the environment under the GGX lobe of roughness ``alpha``
     (α = r²; α = 1 with the clamped cosine: irradiance / π), read from ``pyramid``
     (:func:`ibl_pyramid` of a p-cube); ``tau`` bounds the expansion step (src/core/ibl.h)."""
     args = (
         pyramid, int(p), int(nch), *_geo(geometry), float(scale_x), float(scale_y), float(alpha),
-        int(samples), _c(rot, np.float64), bool(fill), float(tau), out, _threads,
+        int(samples), _c(rot, np.float64), bool(fill), float(tau), out, get_threads(threads),
     )  # fmt: skip
     _run_watched(lambda _: _core.ibl_prefilter(*args), 0, watch=False)
 
 
-def sh_project(pixels, geometry, samples: int, sign_x: float) -> np.ndarray:
+def sh_project(pixels, geometry, samples: int, sign_x: float, threads=None) -> np.ndarray:
     """The 9 order-2 SH coefficients (9, C) of a map's pixels (R&H 2001, real orthonormal
     basis), by S × S sub-samples per pixel; ``sign_x`` −1 projects in the cube frame."""
     pixels = _c(pixels, np.float32)
     out = np.zeros((9, pixels.shape[2]))
-    _core.sh_project(pixels, *_geo(geometry), int(samples), float(sign_x), out, _threads)
+    _core.sh_project(pixels, *_geo(geometry), int(samples), float(sign_x), out,
+                     get_threads(threads))  # fmt: skip
     return out
