@@ -1217,33 +1217,46 @@ def test_sigint_at_any_early_moment_is_one_line_or_nothing(tmp_path):
 def test_kill_9_of_the_batch_parent_ends_its_workers_quietly(tmp_path):
     """SIGKILL of ``envconv batch -j 2``: each worker finished its job for no one and printed
     a BrokenPipeError traceback. Now they stop at once (SIGTERM from Linux at the parent's
-    death), print nothing and leave no temp."""
+    death), remove their temps and end; the batch's own streams hold nothing."""
     inputs, out = tmp_path / "in", tmp_path / "out"
     inputs.mkdir()
     for i in range(4):
         _noise(inputs / f"sky{i}.exr", 32, seed=i)
     process = _start("batch", inputs, "--out", out / "{stem}.exr", "-j", 2,
                      "resample", "--to", "latlong", "--size", 1024, "--samples", 16)  # fmt: skip
+
+    def stat(pid: int) -> list[str]:
+        try:
+            return open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()
+        except OSError:
+            return []
+
+    def ended(pid: int) -> bool:  # gone, or a zombie until init reaps it
+        return stat(pid)[:1] in ([], ["Z"])
+
+    def busy(pid: int) -> bool:  # past start-up (~1 s of CPU), into its first job (~8 s)
+        fields = stat(pid)
+        return bool(fields) and (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK") > 2
+
+    workers: list[int] = []
     try:
         workers = _wait_for(
             lambda: len(_worker_pids(process.pid)) == 2 and _worker_pids(process.pid)
         )
-        time.sleep(1.0)  # both in their first job's kernel
+        _wait_for(lambda: all(busy(pid) for pid in workers), timeout=120)
         os.kill(process.pid, signal.SIGKILL)
         killed = time.monotonic()
-        stdout, stderr = process.communicate(timeout=60)  # EOF: every worker closed stderr
+        stdout, stderr = process.communicate(timeout=60)  # the workers hold its stdout too
+        _wait_for(lambda: all(ended(pid) for pid in workers), timeout=5.0)
+        assert time.monotonic() - killed < 5.0  # not the rest of a job (~6 s of CPU)
     finally:
+        for pid in workers:
+            if not ended(pid):
+                os.kill(pid, signal.SIGKILL)
         if process.poll() is None:
             os.killpg(process.pid, signal.SIGKILL)
             process.communicate()
-    assert time.monotonic() - killed < 5.0  # not the rest of a job at size 1024, S = 16
     assert stdout == "" and stderr == "", stderr
-    for pid in workers:
-        try:
-            state = open(f"/proc/{pid}/stat").read().rsplit(")", 1)[1].split()[0]
-        except OSError:
-            continue
-        assert state == "Z", (pid, state)  # ended (a zombie until init reaps it)
     assert not litter(tmp_path)
 
 
