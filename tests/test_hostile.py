@@ -1172,7 +1172,7 @@ def _before_envconv_ran(stderr: str) -> bool:
     package or ran the first lines of envconv/__main__.py, which install it. Out of any
     program's reach (docs/shell.md); anywhere later it is a failure."""
     lines = stderr.strip().splitlines()
-    if not lines or lines[-1].strip() != "KeyboardInterrupt":
+    if not lines or not re.fullmatch(r"KeyboardInterrupt:?", lines[-1].strip()):
         return False
     frames = re.findall(r'File "([^"]+)", line \d+, in (\S+)', stderr)
     early = ("__init__.py", "errors.py")
