@@ -1323,3 +1323,256 @@ def test_two_threads_of_a_library_caller_keep_their_output(tmp_path, capfd, monk
         written = envconv.read(tmp_path / f"out{index}.exr").pixels
         filled = written[written > 0]
         assert filled.size == 6 * 8 * 8 * 3 and np.allclose(filled, 1.0 + index, rtol=1e-3)
+
+
+# --- files and outputs, second round (issue 27): writers' results, the report, final names, ---
+# sets replaced whole, temp locks, exit 3s that were due a one-line 1 or 2, late checks.
+# Truth: the bytes of inputs and old outputs (snapshots taken before the run), the exit status
+# and the one line, the folder listings, and the pixels read back against the constant each
+# input held.
+
+
+def _fsize_limit(limit: int):
+    """preexec_fn: a "full disk" at ``limit`` bytes per file (EFBIG; SIGXFSZ ignored)."""
+
+    def apply():
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
+        resource.setrlimit(resource.RLIMIT_FSIZE, (limit, limit))
+
+    return apply
+
+
+@pytest.mark.parametrize("command, name", [
+    ("convert", "o.png"), ("convert", "o.jpg"), ("preview", "o.png"), ("preview", "o.jpg"),
+])  # fmt: skip
+def test_a_full_disk_fails_png_and_jpeg_writes(tmp_path, command, name):
+    """libpng reported EFBIG only through geterror (write and close said True: exit 0 and a
+    cut PNG renamed over the old file); libjpeg called exit(1) (empty stderr, temp left)."""
+    source = _noise(tmp_path / "noise.exr")
+    target = tmp_path / "out" / name
+    target.parent.mkdir()
+    target.write_bytes(b"old output")
+    before = snapshot(source, target)
+    args = {"convert": ["convert", source, target, "--to", "latlong", "--size", 256],
+            "preview": ["preview", source, "-o", target]}[command]  # fmt: skip
+    run = envconv(*args, timeout=60, preexec_fn=_fsize_limit(40_000))
+    assert_failed_cleanly(run, 1, tmp_path, message=f"cannot write {target}")
+    assert_untouched(before)
+
+
+def test_a_full_disk_fails_the_batch_job_that_writes_a_png(tmp_path):
+    source = _noise(tmp_path / "noise.exr")
+    out, report = tmp_path / "out", tmp_path / "report.json"
+    out.mkdir()
+    (out / "noise.png").write_bytes(b"old output")
+    before = snapshot(source, out / "noise.png")
+    run = envconv("batch", source, "--out", out / "{stem}.png", "--report", report, "resample",
+                  "--to", "latlong", "--size", 256, preexec_fn=_fsize_limit(40_000))  # fmt: skip
+    assert run.returncode == 1 and "1 failed" in run.stdout, (run.stdout, run.stderr)
+    (record,) = json.loads(report.read_text())["files"]
+    assert record["status"] == "failed" and "cannot write" in record["error"], record
+    assert not litter(tmp_path)
+    assert_untouched(before)
+
+
+def _graph(tmp_path, write_path="o_{stem}.exr"):
+    graph = tmp_path / "g.toml"
+    graph.write_text('inputs = ["sky.exr"]\n[[steps]]\nstep = "resample"\nto = "latlong"\n'
+                     f'size = 8\n[[steps]]\nstep = "write"\npath = "{write_path}"\n')  # fmt: skip
+    return graph
+
+
+@pytest.mark.parametrize("case, message", [
+    ("graph", "input"), ("input", "input"), ("output", "twice"), ("under-a-file", "report"),
+    ("folder", "folder"), ("no-clobber", "no-clobber"),
+])  # fmt: skip
+def test_the_report_path_goes_through_the_output_policy(tmp_path, case, message):
+    """--report is an output like any other: never an input (the graph file included), never
+    another output, refused with -n when it exists; a path that cannot be written is refused
+    before any job runs (it failed after all of them, or replaced the file named)."""
+    source = _map(tmp_path / "sky.exr")
+    graph = _graph(tmp_path)
+    out = tmp_path / "out"
+    (tmp_path / "folder.json").mkdir()
+    (tmp_path / "old.json").write_text("{}")
+    report = {"graph": graph, "input": source, "output": out / "sky.exr",
+              "under-a-file": source / "r.json", "folder": tmp_path / "folder.json",
+              "no-clobber": tmp_path / "old.json"}[case]  # fmt: skip
+    before = snapshot(source, graph, tmp_path / "old.json")
+    if case == "graph":
+        run = envconv("run", graph, "--report", report)
+    else:
+        extra = ["-n"] if case == "no-clobber" else []
+        run = envconv("batch", source, *extra, "--out", out / "{stem}.exr", "--report", report,
+                      "resample", "--to", "latlong", "--size", 8)  # fmt: skip
+    _refused(run, tmp_path, message=message)
+    assert_untouched(before)
+    assert not out.exists() and not (tmp_path / "o_sky.exr").exists()  # no job ran
+
+
+def test_report_dash_writes_the_json_on_stdout(tmp_path):
+    source = _map(tmp_path / "sky.exr")
+    run = envconv("batch", source, "--out", tmp_path / "out" / "{stem}.exr", "--report", "-",
+                  "resample", "--to", "latlong", "--size", 8, cwd=tmp_path)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    data = json.loads(run.stdout)  # stdout holds the report alone; the summary is on stderr
+    assert [r["status"] for r in data["files"]] == ["done"]
+    assert run.stderr_lines[-1].startswith("1 files: 1 done"), run.stderr
+    assert not (tmp_path / "-").exists()
+
+
+def test_braces_in_an_input_name_stay_literal_in_outputs(tmp_path):
+    """a0.exr and a{level}.exr were both "done" into out/a0.exr: the {level} of the second
+    input's stem was expanded as the output's own. Each input gets its own file, whose pixels
+    are that input's constant."""
+    folder, out = tmp_path / "in", tmp_path / "out"
+    folder.mkdir()
+    values = {"a0": 1.0, "a{level}": 2.0, "b{x}": 3.0}
+    for stem, value in values.items():
+        _map(folder / f"{stem}.exr", value)
+    run = envconv("batch", folder, "--out", out / "{stem}.exr", "resample", "--to", "latlong",
+                  "--size", 8)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert sorted(os.listdir(out)) == sorted(f"{stem}.exr" for stem in values)
+    from envconv import io
+
+    for stem, value in values.items():
+        assert np.allclose(io.read(out / f"{stem}.exr").pixels, value, rtol=1e-3), stem
+    assert not litter(tmp_path)
+
+
+def test_two_inputs_on_one_set_of_level_files_are_refused_before_any_work(tmp_path):
+    """{level} paths were left out of the duplicate check ("needs a header"): the second job
+    replaced the first one's level files. The sizes are known, so are the final names."""
+    for name in ("d1", "d2"):
+        (tmp_path / name).mkdir()
+        _map(tmp_path / name / "x.exr")
+    out = tmp_path / "out"
+    run = envconv("batch", tmp_path / "d1" / "x.exr", tmp_path / "d2" / "x.exr", "--out",
+                  out / "{stem}_{level}.png", "resample", "--to", "latlong", "--size", 8,
+                  "--mips", 2)  # fmt: skip
+    _refused(run, tmp_path, message="would both write")
+    assert not out.exists()
+
+
+def test_face_in_a_folder_name_makes_one_folder_per_face(tmp_path):
+    """'out/{face}/sky.exr' made a literal '{face}' folder, then failed on out/px."""
+    source = _map(tmp_path / "sky.exr", 0.5)
+    run = envconv("convert", source, tmp_path / "out" / "{face}" / "sky.exr", "--to",
+                  "cube-faces", "--size", 4)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    assert sorted(os.listdir(tmp_path / "out")) == sorted(["px", "nx", "py", "ny", "pz", "nz"])
+    from envconv import io
+
+    back = io.read(str(tmp_path / "out" / "{face}" / "sky.exr"))
+    assert back.layout.name == "cube-faces" and np.allclose(back.pixels, 0.5, rtol=1e-3)
+
+
+@pytest.mark.parametrize("length", [215, 251, 255])
+def test_long_output_names_are_written(tmp_path, length):
+    """A name of 215-255 bytes is legal, but its temp (36 bytes longer) was not: exit 3."""
+    source = _map(tmp_path / "sky.exr")
+    target = tmp_path / ("a" * (length - 4) + ".exr")
+    run = envconv("convert", source, target, "--to", "latlong", "--size", 4)
+    assert (run.returncode, run.stderr) == (0, ""), run.stderr
+    assert sorted(os.listdir(tmp_path)) == sorted([target.name, "sky.exr"])
+
+
+def test_a_name_longer_than_the_file_system_allows_is_refused(tmp_path):
+    source = _map(tmp_path / "sky.exr")
+    run = envconv("convert", source, tmp_path / ("a" * 252 + ".exr"), "--to", "latlong",
+                  "--size", 4)  # fmt: skip
+    _refused(run, tmp_path, message="too long")
+
+
+def test_an_output_that_is_a_folder_is_refused(tmp_path):
+    source = _map(tmp_path / "sky.exr")
+    (tmp_path / "out.exr").mkdir()
+    run = envconv("convert", source, tmp_path / "out.exr", "--to", "latlong", "--size", 4)
+    _refused(run, tmp_path, message="folder")
+    assert os.listdir(tmp_path / "out.exr") == []
+
+
+def _immutable(path) -> bool:
+    """chattr +i ``path`` (root, on a file system with the flag); False where it cannot be."""
+    import shutil
+
+    chattr = shutil.which("chattr")
+    if chattr is None:
+        return False
+    done = subprocess.run([chattr, "+i", str(path)], capture_output=True)
+    return done.returncode == 0
+
+
+def test_eperm_on_the_rename_is_one_line(tmp_path):
+    source = _map(tmp_path / "sky.exr")
+    target = _map(tmp_path / "out" / "o.exr", 5.0) if (tmp_path / "out").mkdir() is None else None
+    before = snapshot(target)
+    if not _immutable(target):
+        pytest.skip("chattr +i is not available here (needs root and a file system with it)")
+    try:
+        run = envconv("convert", source, target, "--to", "latlong", "--size", 8)
+    finally:
+        subprocess.run(["chattr", "-i", str(target)])
+    assert_failed_cleanly(run, 1, tmp_path, message=f"cannot write {target}")
+    assert_untouched(before)
+
+
+def test_a_stray_temp_with_a_huge_pid_is_cleaned(tmp_path):
+    from envconv.io.temps import _host
+
+    source = _map(tmp_path / "sky.exr")
+    stray = tmp_path / f".x.envconv-{_host()}-{10**30}-0badf00d.tmp.exr"
+    stray.write_bytes(b"partial")
+    run = envconv("convert", source, tmp_path / "o.exr", "--to", "latlong", "--size", 4)
+    assert (run.returncode, run.stderr) == (0, ""), run.stderr
+    assert sorted(os.listdir(tmp_path)) == ["o.exr", "sky.exr"]
+
+
+def test_a_live_runs_temp_is_kept_whatever_its_pid_says(tmp_path):
+    """A run in another PID namespace (a container) names its temp with a PID that is dead
+    here: its lock on the temp, not the PID, says it is alive. A stale temp (no lock) goes."""
+    import fcntl
+
+    from envconv.io.temps import _host
+
+    source = _map(tmp_path / "sky.exr")
+    live = tmp_path / f".x.envconv-{_host()}-{_dead_pid()}-00c0ffee.tmp.exr"
+    stale = tmp_path / f".y.envconv-{_host()}-{_dead_pid()}-0badf00d.tmp.exr"
+    stale.write_bytes(b"partial")
+    with open(live, "wb") as handle:
+        fcntl.flock(handle, fcntl.LOCK_EX)
+        handle.write(b"being written")
+        run = envconv("convert", source, tmp_path / "o.exr", "--to", "latlong", "--size", 4)
+        assert (run.returncode, run.stderr) == (0, ""), run.stderr
+        assert sorted(os.listdir(tmp_path)) == sorted([live.name, "o.exr", "sky.exr"])
+
+
+def _deep_exr(path):
+    import OpenImageIO as oiio
+
+    spec = oiio.ImageSpec(4, 2, 2, oiio.FLOAT)
+    spec.channelnames = ("R", "Z")
+    spec.deep = True
+    buf = oiio.ImageBuf(spec)
+    for y in range(2):
+        for x in range(4):
+            buf.set_deep_samples(x, y, 0, (x + y) % 3)  # 0, 1 or 2 samples
+            for s in range((x + y) % 3):
+                buf.set_deep_value(x, y, 0, 0, s, 0.5 + s)
+                buf.set_deep_value(x, y, 0, 1, s, 1.0 + s)
+    assert buf.write(str(path)), buf.geterror()
+    return path
+
+
+def test_info_describes_a_deep_exr_and_convert_refuses_it(tmp_path):
+    source = _deep_exr(tmp_path / "deep.exr")
+    before = snapshot(source)
+    info = envconv("info", source, "--json")
+    assert info.returncode == 0 and info.stderr == "", info.stderr
+    record = json.loads(info.stdout)
+    assert record["deep"] is True and record["channels"] == ["R", "Z"]
+    assert record["samples_per_pixel"] == [0, 2] and record["layout"] == "unknown"
+    assert record["width"] == 4 and record["height"] == 2
+    _convert_fails(tmp_path, source, 1, "deep")
+    assert_untouched(before)
