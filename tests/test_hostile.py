@@ -333,7 +333,9 @@ def _signal_after(process, signum, predicate, timeout=60.0):
 
 def test_temp_files_are_never_inputs_and_stale_ones_are_cleaned(tmp_path):
     """A killed run's temps (old and new names) are no batch inputs and the next write into
-    their folder removes them; a live run's temp is left alone."""
+    their folder removes them; a live run's temp (its lock held) is left alone."""
+    import fcntl
+
     from envconv.io.temps import _host
 
     source = tmp_path / "sky.exr"
@@ -346,8 +348,10 @@ def test_temp_files_are_never_inputs_and_stale_ones_are_cleaned(tmp_path):
     for path in (*stale, live):
         path.write_bytes(data)  # a whole image: a batch that took it would convert it
     report = tmp_path / "report.json"
-    run = envconv("batch", tmp_path, "--out", tmp_path / "{stem}_cross.exr", "--report", report,
-                  "resample", "--to", "cube-vcross", "--size", 4)  # fmt: skip
+    with open(live, "rb") as owner:
+        fcntl.flock(owner, fcntl.LOCK_EX)  # what a live run holds
+        run = envconv("batch", tmp_path, "--out", tmp_path / "{stem}_cross.exr", "--report",
+                      report, "resample", "--to", "cube-vcross", "--size", 4)  # fmt: skip
     assert run.returncode == 0, run.stderr
     assert [r["input"] for r in json.loads(report.read_text())["files"]] == [str(source)]
     assert sorted(os.listdir(tmp_path)) == sorted(
@@ -1516,6 +1520,26 @@ def test_eperm_on_the_rename_is_one_line(tmp_path):
         subprocess.run(["chattr", "-i", str(target)])
     assert_failed_cleanly(run, 1, tmp_path, message=f"cannot write {target}")
     assert_untouched(before)
+
+
+def test_a_face_set_whose_one_file_cannot_be_replaced_stays_old(tmp_path):
+    """Six renames, the fourth refused (EPERM): a mixed set was left. All six stay old."""
+    out = tmp_path / "out"
+    first = envconv("convert", _map(tmp_path / "a.exr", 1.0), out / "s_{face}.exr", "--to",
+                    "cube-faces", "--size", 4)  # fmt: skip
+    assert first.returncode == 0, first.stderr
+    files = [out / f"s_{face}.exr" for face in ("px", "nx", "py", "ny", "pz", "nz")]
+    before = snapshot(*files)
+    if not _immutable(files[3]):
+        pytest.skip("chattr +i is not available here (needs root and a file system with it)")
+    try:
+        run = envconv("convert", _map(tmp_path / "b.exr", 2.0), out / "s_{face}.exr", "--to",
+                      "cube-faces", "--size", 4)  # fmt: skip
+    finally:
+        subprocess.run(["chattr", "-i", str(files[3])])
+    assert_failed_cleanly(run, 1, tmp_path, message=f"cannot write {files[3]}")
+    assert_untouched(before)
+    assert sorted(os.listdir(out)) == sorted(f.name for f in files)
 
 
 def test_a_stray_temp_with_a_huge_pid_is_cleaned(tmp_path):

@@ -280,7 +280,7 @@ class _Pool:
         remove the temporary files of the jobs that were running."""
         import time
 
-        from ..io.temps import clean_stale
+        from ..io.sets import clean_folder
 
         for worker in self.workers:
             if worker.process.is_alive():
@@ -293,7 +293,7 @@ class _Pool:
                 worker.process.join(0.2)
             self._drain(worker)
         for folder in self._folders():
-            clean_stale(folder)
+            clean_folder(folder)
 
     def _drain(self, worker: _Worker) -> None:
         """Take the record a stopped worker sent before it stopped: that job did finish."""

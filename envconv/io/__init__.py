@@ -8,8 +8,10 @@ face file, through a temporary file renamed into place. The modules:
 * :mod:`~envconv.io.writer`: maps to files, and :func:`write_bytes` for made containers;
 * :mod:`~envconv.io.write_plan`: what a write will store (files, pixel type, channels,
   levels), asked by the writer and by every plan before any pixel;
+* :mod:`~envconv.io.output`: every file written: temporary files, each result checked;
+* :mod:`~envconv.io.sets`: files replaced all at once (a journal), and read never half replaced;
 * :mod:`~envconv.io.specs`: what a written image carries (channels, tags, its ImageSpec);
-* :mod:`~envconv.io.temps`: the temporary files of writes (names, live ones, stale ones);
+* :mod:`~envconv.io.temps`: the temporary files of writes (names, locks, stale ones);
 * :mod:`~envconv.io.probe`: a map's facts from its headers alone (``envconv info``);
 * :mod:`~envconv.io.files`: headers, display/data windows and parts, through OIIO;
 * :mod:`~envconv.io.chatter`: what the image libraries print, captured and folded into errors;
@@ -18,7 +20,8 @@ face file, through a temporary file renamed into place. The modules:
 * :mod:`~envconv.io.encode`: the output plan (pixel type, colour space, clipping);
 * :mod:`~envconv.io.face_files`: ``{face}`` paths of cube-face and skybox sets;
 * :mod:`~envconv.io.textures`, :mod:`~envconv.io.dds`, :mod:`~envconv.io.ktx2`: engine
-  containers; :mod:`~envconv.io.picture`: 8-bit pictures (previews, contact sheets).
+  containers, written and read; :mod:`~envconv.io.picture`: 8-bit pictures (previews, contact
+  sheets).
 """
 
 from __future__ import annotations

@@ -13,6 +13,7 @@ one. File names match case-insensitively when the exact name does not exist (Sou
 from __future__ import annotations
 
 import os
+import re
 from typing import NamedTuple
 
 from ..errors import ImageIOError, LayoutError
@@ -20,7 +21,10 @@ from ..layouts import get_layout
 from ..layouts.facesets import FACE_SETS, FaceSet, get_face_set
 
 __all__ = ["FaceFiles", "find_face_files", "face_path", "face_glob", "part_path", "first_file",
-           "files_of"]  # fmt: skip
+           "files_of", "escape_braces", "has_placeholder", "fill_placeholder", "literal_path"]  # fmt: skip
+
+#: An output path's own placeholders, and the doubled braces that stand for one brace.
+_TOKEN = re.compile(r"\{\{|\}\}|\{(face|level)\}")
 
 _CUBE = "cube-faces"
 _PARABOLOID = "paraboloid-split"
@@ -51,7 +55,8 @@ FACE = "{face}"
 
 def face_path(template: str, name: str) -> str:
     """``template`` with ``{face}`` replaced by ``name`` (``sky_{face}.exr``, ``px`` →
-    ``sky_px.exr``): the one home of that expansion, for reading, writing and batches."""
+    ``sky_px.exr``): the one home of that expansion for inputs (reading, batches); an output
+    path, whose doubled braces are literal ones, is filled by :func:`fill_placeholder`."""
     return template.replace(FACE, name)
 
 
@@ -61,6 +66,29 @@ def face_glob(template: str) -> str:
     import glob
 
     return face_path(glob.escape(template), "*")
+
+
+def escape_braces(text: str) -> str:
+    """``text`` (a file name put into an output path) with each brace doubled, so that a
+    ``{level}`` or ``{face}`` in it stays literal: ``a{level}`` → ``a{{level}}``."""
+    return text.replace("{", "{{").replace("}", "}}")
+
+
+def has_placeholder(path: str, name: str) -> bool:
+    """True when the output path ``path`` holds the placeholder ``{name}`` (``face`` or
+    ``level``), not counting escaped braces (``{{level}}`` is literal)."""
+    return any(m.group(1) == name for m in _TOKEN.finditer(path))
+
+
+def fill_placeholder(path: str, name: str, value: str) -> str:
+    """``path`` with every ``{name}`` placeholder replaced by ``value``; escapes are kept."""
+    return _TOKEN.sub(lambda m: value if m.group(1) == name else m.group(0), path)
+
+
+def literal_path(path: str) -> str:
+    """The file name an output path stands for once its placeholders are filled: doubled
+    braces become single ones."""
+    return re.sub(r"\{\{|\}\}", lambda m: m.group(0)[0], path)
 
 
 def part_path(template: str, name: str, listing: dict | None = None) -> str:

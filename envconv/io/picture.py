@@ -11,11 +11,8 @@ import os
 
 import numpy as np
 
-from ..errors import ImageIOError
-from .chatter import library_output
-from .files import _first_line, _oiio
-from .temps import discard, temp_for
-from .writer import write_bytes
+from .files import _oiio
+from .output import write_bytes, write_files, write_images
 
 __all__ = ["write_picture", "write_page"]
 
@@ -25,28 +22,13 @@ def write_picture(pixels: np.ndarray, path: str | os.PathLike) -> str:
 
     The file is tagged ``oiio:ColorSpace = srgb_display`` (the preview's display encoding).
     Returns the path written. Raises :class:`~envconv.errors.ImageIOError` with a one-line
-    message when the file cannot be written.
+    message when the file cannot be written (:mod:`envconv.io.output` checks every result).
     """
     target = os.fspath(path)
     data = np.ascontiguousarray(pixels, dtype=np.uint8)
-    oiio = _oiio()
-    out = oiio.ImageOutput.create(target)
-    if out is None:
-        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
-    temp = temp_for(target)
-    spec = oiio.ImageSpec(data.shape[1], data.shape[0], data.shape[2], "uint8")
+    spec = _oiio().ImageSpec(data.shape[1], data.shape[0], data.shape[2], "uint8")
     spec.attribute("oiio:ColorSpace", "srgb_display")
-    try:
-        with library_output(f"cannot write {target}", temp):  # what libpng/libjpeg print
-            ok = out.open(temp, spec) and out.write_image(data)
-            message = out.geterror()
-            ok = out.close() and ok
-            del out
-        if not ok:
-            raise ImageIOError(f"cannot write {target}: {_first_line(message)}")
-        os.replace(temp, target)
-    finally:
-        discard(temp)
+    write_files([target], lambda temp, _, __: write_images(temp, target, [(spec, "Create", data)]))
     return target
 
 

@@ -108,9 +108,16 @@ def _probe_faces(template: str, layout: str | None, level: int, part: str | None
     """A ``{face}`` set: every file's header, which must agree in size and channels."""
     from .face_files import find_face_files
     from .reader import mip_levels, read_header
+    from .sets import read_settled
 
-    files = find_face_files(template, layout)
-    heads = [read_header(p, level, part) for p in files.paths]
+    files = None  # the set found by the last find()
+
+    def find() -> list[str]:
+        nonlocal files
+        files = find_face_files(template, layout)
+        return files.paths
+
+    heads = read_settled(find, lambda paths: [read_header(p, level, part) for p in paths])
     if len({(w, h, tuple(c)) for w, h, c, _ in heads}) != 1:
         raise ImageIOError(f"the {files.layout} parts of {template} differ in size or channels")
     width, height, channels, metadata = heads[0]

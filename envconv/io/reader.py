@@ -182,11 +182,21 @@ def _read_multi(
     """The parts of ``template`` side by side in face order, each cube face turned from its
     face set's orientation into envconv's; holes (and an ``A``) as in :func:`read`."""
     from .face_files import find_face_files
+    from .sets import read_settled
 
-    files = find_face_files(template, layout, faces)
+    files = None  # the set found by the last find()
+
+    def find() -> list[str]:
+        nonlocal files
+        files = find_face_files(template, layout, faces)
+        return files.paths
+
+    def read_all(paths: list[str]) -> list:
+        _check_memory(paths[0], level, part, len(paths))
+        return [read_file(path, level, part) for path in paths]
+
+    images = read_settled(find, read_all)  # never a set half replaced (envconv.io.sets)
     found = get_layout(files.layout)
-    _check_memory(files.paths[0], level, part, len(files.paths))
-    images = [read_file(path, level, part) for path in files.paths]
     holes = any(image.valid is not None for image in images)
     cells = []
     for image in images:

@@ -23,7 +23,7 @@ from dataclasses import dataclass
 
 from ..errors import LayoutError, UsageError
 from ..layouts import Layout, get_layout
-from .face_files import face_path
+from .face_files import fill_placeholder, has_placeholder, literal_path
 from .formats import CONTAINER_FORMATS, format_of
 
 __all__ = ["WritePlan", "output_paths", "face_names", "check_write", "stored_channels",
@@ -68,32 +68,36 @@ def output_paths(envmap_layout, path: str | os.PathLike, levels: int = 1, faces=
     """Files that writing a map of this layout to ``path`` produces.
 
     With ``{level}`` in the path every one of ``levels`` mip levels is a file of its own
-    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``. ``faces``
-    names the files of a ``cube-faces`` map by a face set (:mod:`envconv.layouts.facesets`). A DDS or
-    KTX2 file holds every face and level itself.
+    (``{level}`` becomes 0, 1, …); multi-file layouts combine it with ``{face}``, in a file
+    name or a folder name. ``faces`` names the files of a ``cube-faces`` map by a face set
+    (:mod:`envconv.layouts.facesets`). A DDS or KTX2 file holds every face and level itself.
+    Doubled braces stand for one (``a{{level}}.exr`` is the file ``a{level}.exr``;
+    :func:`envconv.io.face_files.escape_braces`).
     """
-    path = os.fspath(path)
+    return [literal_path(p) for p in _placed_paths(envmap_layout, os.fspath(path), levels, faces)]
+
+
+def _placed_paths(envmap_layout, path: str, levels: int, faces) -> list[str]:
+    """:func:`output_paths` before the doubled braces are undone."""
     if os.path.splitext(path)[1].lower() in CONTAINER_FORMATS:
-        if "{level}" in path or "{face}" in path:
+        if has_placeholder(path, "level") or has_placeholder(path, "face"):
             raise LayoutError(f"{path}: a DDS or KTX2 file holds every face and level; "
                               "drop {face} and {level} from the path")  # fmt: skip
         return [path]
-    if "{level}" in path:
-        return [
-            p
-            for k in range(max(int(levels), 1))
-            for p in output_paths(envmap_layout, path.replace("{level}", str(k)), faces=faces)
-        ]
+    if has_placeholder(path, "level"):
+        return [p for k in range(max(int(levels), 1))
+                for p in _placed_paths(envmap_layout, fill_placeholder(path, "level", str(k)), 1,
+                                       faces)]  # fmt: skip
     layout = get_layout(envmap_layout)
     names = face_names(layout, faces)
     if layout.multi_file:
-        if "{face}" not in path:
+        if not has_placeholder(path, "face"):
             raise LayoutError(
                 f"layout {layout.name} writes {len(layout.face_names)} files; "
                 "put {face} in the output path, e.g. sky_{face}.exr"
             )
-        return [face_path(path, name) for name in names]
-    if "{face}" in path:
+        return [fill_placeholder(path, "face", name) for name in names]
+    if has_placeholder(path, "face"):
         raise LayoutError(
             f"{{face}} in the output path needs a multi-file layout, not {layout.name}"
         )
@@ -129,7 +133,7 @@ def check_write(layout: Layout | str, path: str, levels: int | bool = 1,
         _check_container(layout, guard, path)
         return
     chain = levels is True or int(levels) > 1
-    if not chain or "{level}" in path:
+    if not chain or has_placeholder(path, "level"):
         return
     count = "a MIP chain" if levels is True else f"{int(levels)} MIP levels"
     if fmt not in ("openexr", "tiff"):
@@ -205,10 +209,11 @@ def plan_write(layout: Layout | str, path: str, size: int, guard: int = 0, level
     path = os.fspath(path)
     full = full_level_count(*layout.file_size(size, guard))
     check_write(layout, path, levels, full, guard)
-    files = output_paths(layout, path, levels if "{level}" in path else 1, faces=faces)
+    per_level = has_placeholder(path, "level")
+    files = output_paths(layout, path, levels if per_level else 1, faces=faces)
     output = plan_output(path, pixel_type, dict(metadata or {}), output_colorspace, bit_depth,
                          ocio_config, compression)  # fmt: skip
-    if "{level}" in path:
+    if per_level:
         stored = 1
     elif output.format in ("dds", "ktx2"):
         stored = container_levels(layout, size, levels)

@@ -1,9 +1,10 @@
 """Writing environment maps through OpenImageIO: :func:`envconv.io.write` and its helpers.
 
-Every output is written to a temporary file in the destination directory and renamed into place,
-so a failure never leaves a partial file, and inputs are never opened for writing. Pixels are
-converted from the working space to the output's colour space, range and bit depth by
-:func:`envconv.io.encode.encode_output`.
+Every output is written to a temporary file in the destination directory and renamed into place
+(:mod:`envconv.io.output`, every result checked), the files of one map (faces, levels) all at
+once (:mod:`envconv.io.sets`), so a failure never leaves a partial file or a mixed set, and
+inputs are never opened for writing. Pixels are converted from the working space to the
+output's colour space, range and bit depth by :func:`envconv.io.encode.encode_output`.
 """
 
 from __future__ import annotations
@@ -17,13 +18,11 @@ import numpy as np
 from ..envmap import EnvMap
 from ..errors import ImageIOError
 from ..layouts.view import VIEW_TAG, view_text
-from .chatter import library_output
 from .exr_header import PLACEHOLDER, store_sampleborder
-from .files import _first_line, _oiio
+from .face_files import has_placeholder
 from .formats import format_of
+from .output import write_bytes, write_files, write_images
 from .specs import LevelImage, image_spec, level_image, set_mip_attributes
-from .temps import discard as _discard
-from .temps import temp_for as _temp_path
 from .write_plan import check_write, face_names, output_paths
 
 __all__ = ["write", "write_bytes", "output_paths", "LevelImage"]
@@ -58,7 +57,9 @@ def write(
     ``envconv:level``). Alpha is written unassociated (never premultiplied). ``faces`` writes a
     ``cube-faces`` map as another program's six skybox files (names and face turns of
     :mod:`envconv.layouts.facesets`). A ``.dds`` or ``.ktx2`` path gets a texture container with every
-    level (:mod:`envconv.io.textures`). Returns the paths written.
+    level (:mod:`envconv.io.textures`). ``{face}`` and ``{level}`` may sit in folder names too;
+    a doubled brace stands for one (``a{{level}}.exr`` is the file ``a{level}.exr``). The files
+    replace older ones all at once (:mod:`envconv.io.sets`). Returns the paths written.
     """
     from .encode import encode_output
 
@@ -75,8 +76,9 @@ def write(
     )
     envmap = replace(envmap, metadata=encoded.metadata, levels=None)
     if encoded.plan.format in ("dds", "ktx2"):
-        return [_write_container(envmap, os.fspath(path), encoded.plan.format, levels)]
-    per_level = "{level}" in os.fspath(path)
+        (target,) = output_paths(envmap.layout, path)
+        return [_write_container(envmap, target, encoded.plan.format, levels)]
+    per_level = has_placeholder(os.fspath(path), "level")
     paths = output_paths(envmap.layout, path, len(levels) if per_level else 1, faces=faces)
     layout = envmap.layout
     cells = [_cells(layout, level, faces) for level in levels]
@@ -85,18 +87,13 @@ def write(
         jobs = [([cells[k][f]], k, names[f]) for k in range(len(levels)) for f in range(len(names))]
     else:
         jobs = [([cell[f] for cell in cells], None, names[f]) for f in range(len(names))]
-    written: list[tuple[str, str]] = []
-    try:
-        for target, (images, level, face) in zip(paths, jobs, strict=True):
-            temp = _temp_path(target)
-            written.append((temp, target))
-            _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
-        for temp, target in written:
-            os.replace(temp, target)
-        _report(encoded.finish(), warnings)
-    finally:
-        for temp, _ in written:
-            _discard(temp)
+
+    def write_file(temp: str, target: str, index: int) -> None:
+        images, level, face = jobs[index]
+        _write_one(temp, target, images, envmap, face, bit_depth, compression, level)
+
+    write_files(paths, write_file)  # all or none, renamed together (envconv.io.sets)
+    _report(encoded.finish(), warnings)
     return paths
 
 
@@ -118,7 +115,7 @@ def _check_parts(envmap: EnvMap, path: str) -> None:
     if fmt != "openexr":
         raise ImageIOError(f"cannot write {path}: {fmt} holds one image, not the parts {names} "
                            "of the input; pass --part NAME to read one, or write .exr")  # fmt: skip
-    if envmap.levels is not None and "{level}" not in path:
+    if envmap.levels is not None and not has_placeholder(path, "level"):
         raise ImageIOError(f"cannot write {path}: OpenImageIO writes no MIP levels into a "
                            "multi-part OpenEXR; put {level} in the path for one file per level, "
                            "or pass --part NAME to read one part")  # fmt: skip
@@ -129,7 +126,6 @@ def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarra
     from .. import __version__
     from .textures import encode_texture, texture_images
 
-    output_paths(envmap.layout, path)
     check_write(envmap.layout, path, guard=envmap.guard)
     images, cube = texture_images(envmap.layout, levels, envmap.alpha_index)
     extra = {"envconv:layout": envmap.layout.name}
@@ -140,21 +136,6 @@ def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarra
     data = encode_texture(fmt, images, cube, envmap.alpha_index is None,
                           f"envconv {__version__}", extra)  # fmt: skip
     return write_bytes(data, path)
-
-
-def write_bytes(data: bytes, path: str) -> str:
-    """Write ``data`` to ``path`` through a temporary file renamed into place; returns the
-    path, or raises ImageIOError with one line."""
-    temp = _temp_path(path)
-    try:
-        with open(temp, "wb") as handle:
-            handle.write(data)
-        os.replace(temp, path)
-    except OSError as exc:
-        raise ImageIOError(f"cannot write {path}: {exc.strerror or exc}") from None
-    finally:
-        _discard(temp)
-    return path
 
 
 def _cells(layout, pixels: np.ndarray, faces=None) -> list[np.ndarray]:
@@ -200,7 +181,7 @@ def _write_one(temp, target, images, envmap, face, bit_depth, compression, level
                     else "AppendSubimage"
                 )
             writes.append((spec, mode, image.data))
-    _run_writes(temp, target, writes)
+    write_images(temp, target, writes)
     if fmt == "openexr" and any(
         spec.getattribute(PLACEHOLDER) is not None
         for specs, _, _ in writes
@@ -222,70 +203,3 @@ def _part_writes(target, pixels, envmap, face, bit_depth, compression, level):
     specs = [spec for spec, _, _ in writes]
     writes[0] = (specs, "Create", writes[0][2])
     return writes
-
-
-def _run_writes(temp, target, writes) -> None:
-    """Open ``temp`` and write each (spec or list of specs, mode, data) in turn; one-line
-    errors naming ``target``, with what the libraries printed folded in (:mod:`.chatter`)."""
-    with library_output(f"cannot write {target}", temp):
-        _write_all(temp, target, writes)
-
-
-def _write_all(temp, target, writes) -> None:
-    oiio = _oiio()
-    out = oiio.ImageOutput.create(temp)
-    if out is None:
-        raise ImageIOError(f"cannot write {target}: {_first_line(oiio.geterror())}")
-    try:
-        for spec, mode, data in writes:
-            opened = out.open(temp, spec) if isinstance(spec, list) else out.open(temp, spec, mode)
-            if not opened:
-                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
-            if not _write_pixels(out, data):
-                raise ImageIOError(f"cannot write {target}: {_error(out.geterror(), temp, target)}")
-    finally:
-        ok = out.close()
-        message = out.geterror()
-        del out  # release (and flush) the file before it is renamed into place
-        if not ok:
-            raise ImageIOError(f"cannot write {target}: {_error(message, temp, target)}")
-
-
-def _error(message: str, temp: str, target: str) -> str:
-    """The first line of a library's error, naming the target rather than its temp file."""
-    return _first_line(message).replace(temp, target)
-
-
-#: Bytes of pixels handed to OIIO per call. One whole-image ``write_image`` made OIIO's PNG
-#: writer hold about nine times the image (docs/memory.md); bands of rows cost one band.
-WRITE_BAND_BYTES = 1 << 24
-
-
-def _write_pixels(out, data) -> bool:
-    """Write one image's pixels (H, W, C: an array or an :class:`envconv.io.encode.LazyLevel`)
-    to the open ``out`` in bands of rows (scanline files) or of rows of tiles (tiled files);
-    False on a write error (``out.geterror()``).
-
-    Tiled files (MIP levels) go through ``write_tiles``, never ``write_image``: OpenImageIO's
-    ``write_image`` hands the tiles of a tiled file to its thread pool and, when a write fails
-    (a full disk: ENOSPC, EFBIG), waits forever for a task that has given up, with SIGINT
-    ignored. ``write_tiles`` writes in this thread and returns False.
-    """
-    spec = out.spec()
-    height = data.shape[0]
-    lazy = hasattr(data, "rows")  # an encode.LazyLevel: encoded here, band by band
-    rows = max(1, WRITE_BAND_BYTES // max(1, data.shape[1] * data.shape[2] * data.itemsize))
-    rows = data.band_rows if lazy else rows
-    if spec.tile_width:
-        rows = max(spec.tile_height, rows // spec.tile_height * spec.tile_height)
-    for y0 in range(0, height, rows):
-        band = data.rows(y0, min(height, y0 + rows)) if lazy else data[y0 : y0 + rows]
-        y1 = spec.y + y0 + band.shape[0]
-        if spec.tile_width:
-            done = out.write_tiles(spec.x, spec.x + spec.width, spec.y + y0, y1, spec.z,
-                                   spec.z + max(spec.depth, 1), band)  # fmt: skip
-        else:
-            done = out.write_scanlines(spec.y + y0, y1, spec.z, band)
-        if not done:
-            return False
-    return True
