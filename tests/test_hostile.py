@@ -1387,8 +1387,9 @@ def _graph(tmp_path, write_path="o_{stem}.exr"):
 
 
 @pytest.mark.parametrize("case, message", [
-    ("graph", "input"), ("input", "input"), ("output", "twice"), ("under-a-file", "report"),
-    ("folder", "folder"), ("no-clobber", "no-clobber"),
+    ("graph", "g.toml is the input"), ("input", "sky.exr is the input"),
+    ("output", "and --report would both write"), ("under-a-file", "sky.exr is a file, not a folder"),
+    ("folder", "folder.json is a folder"), ("no-clobber", "old.json exists and -n"),
 ])  # fmt: skip
 def test_the_report_path_goes_through_the_output_policy(tmp_path, case, message):
     """--report is an output like any other: never an input (the graph file included), never
@@ -1445,6 +1446,22 @@ def test_braces_in_an_input_name_stay_literal_in_outputs(tmp_path):
     assert not litter(tmp_path)
 
 
+def test_a_face_set_inputs_stem_names_its_set(tmp_path):
+    """{stem} of sky_{face}.exr was "sky_{face}": 'out/{stem}_{face}.exr' wrote
+    out/sky_px_px.exr. It is "sky", the set's name."""
+    import envconv as library
+
+    (tmp_path / "in").mkdir()
+    faces = library.EnvMap(np.full((4, 24, 3), 0.5, np.float32), "cube-faces")
+    library.write(faces, tmp_path / "in" / "sky_{face}.exr")
+    run = envconv("batch", tmp_path / "in" / "sky_{face}.exr", "--out",
+                  tmp_path / "out" / "{stem}_{face}.exr", "resample", "--to", "cube-faces",
+                  "--size", 4)  # fmt: skip
+    assert run.returncode == 0, run.stderr
+    faces = ("px", "nx", "py", "ny", "pz", "nz")
+    assert sorted(os.listdir(tmp_path / "out")) == sorted(f"sky_{f}.exr" for f in faces)
+
+
 def test_two_inputs_on_one_set_of_level_files_are_refused_before_any_work(tmp_path):
     """{level} paths were left out of the duplicate check ("needs a header"): the second job
     replaced the first one's level files. The sizes are known, so are the final names."""
@@ -1486,7 +1503,7 @@ def test_a_name_longer_than_the_file_system_allows_is_refused(tmp_path):
     source = _map(tmp_path / "sky.exr")
     run = envconv("convert", source, tmp_path / ("a" * 252 + ".exr"), "--to", "latlong",
                   "--size", 4)  # fmt: skip
-    _refused(run, tmp_path, message="too long")
+    _refused(run, tmp_path, message="256 bytes long")
 
 
 def test_an_output_that_is_a_folder_is_refused(tmp_path):
@@ -1510,7 +1527,8 @@ def _immutable(path) -> bool:
 
 def test_eperm_on_the_rename_is_one_line(tmp_path):
     source = _map(tmp_path / "sky.exr")
-    target = _map(tmp_path / "out" / "o.exr", 5.0) if (tmp_path / "out").mkdir() is None else None
+    (tmp_path / "out").mkdir()
+    target = _map(tmp_path / "out" / "o.exr", 5.0)
     before = snapshot(target)
     if not _immutable(target):
         pytest.skip("chattr +i is not available here (needs root and a file system with it)")

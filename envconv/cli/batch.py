@@ -26,7 +26,7 @@ BATCH_OPTIONS = [
     click.option("-j", "--jobs", "workers", type=click.IntRange(min=0), default=1, show_default=True, help="Worker processes (0: one per core); kernel threads are split between them."),
     click.option("--skip-existing", is_flag=True, help="Skip an input whose outputs all exist."),
     click.option("-u", "--update", is_flag=True, help="Redo an input only when an output is missing or older than it."),
-    click.option("--report", "report", metavar="FILE.json", help="Write one JSON record per input (status, outputs, seconds, error)."),
+    click.option("--report", "report", metavar="FILE.json", help="Write one JSON record per input (status, outputs, seconds, error); '-' prints it on stdout (the summary then goes to stderr)."),
     click.option("--dask", "dask", metavar="SCHEDULER", help="Run the jobs on a Dask cluster (tcp://host:8786); needs envconv[dask]."),
     click.option("--dry-run", is_flag=True, help="Print every output (layout, size, levels, files) without reading pixels."),
     json_option,
@@ -114,7 +114,8 @@ def run_batch_command(spec: BatchSpec, steps: list) -> None:
     pipeline = Pipeline(steps, variables)
     pipeline.validate(input="input.exr", require_writes=True)
     options = dict(spec.options)
-    jobs = make_jobs(expand_inputs(patterns), pipeline, options.pop("no_clobber", False))
+    jobs = make_jobs(expand_inputs(patterns), pipeline, options.pop("no_clobber", False),
+                     options["report"], [spec.graph] if spec.graph else [])  # fmt: skip
     execute(jobs, **options)
 
 
@@ -124,6 +125,8 @@ def execute(jobs, workers=1, skip_existing=False, update=False, report=None, das
     ``as_json`` the summary is one JSON document of ``command`` on stdout."""
     if skip_existing and update:
         raise click.UsageError("--skip-existing and --update exclude each other")
+    if report == "-" and as_json:
+        raise click.UsageError("--report - and --json both print on stdout; give one of them")
     if dry_run:
         _print_plan(jobs, command if as_json else None)
         return
@@ -137,18 +140,30 @@ def execute(jobs, workers=1, skip_existing=False, update=False, report=None, das
         result = run_batch(jobs, workers=workers, mode=mode, dask=dask, on_record=progress.update)
     except BatchInterrupted as exc:  # the report of what finished, then exit 130/143
         if report:
-            write_report(report, exc.result)
+            _report(report, exc.result)
         raise
     finally:
         progress.close()
     if report:
-        write_report(report, result)
+        _report(report, result)
     if as_json:
         echo_document(command, result.records, result.seconds, result.events)
+    elif report == "-":  # stdout holds the report alone: the summary goes to stderr
+        click.echo(summary_line(result.counts, result.seconds, len(jobs)), err=True)
     else:
         echo_result(summary_line(result.counts, result.seconds, len(jobs)))
     if not result.ok:
         raise click.exceptions.Exit(1)
+
+
+def _report(path: str, result) -> None:
+    """Write the report to ``path``, or print it on stdout for ``-``."""
+    if path == "-":
+        from ..engine.batch import report_text
+
+        echo_result(report_text(result).rstrip("\n"))
+    else:
+        write_report(path, result)
 
 
 def _print_plan(jobs, json_command: str | None = None) -> None:

@@ -30,4 +30,6 @@ def run_command(graph_path, **options):
     """
     graph = load_graph(graph_path)
     inputs = expand_inputs(graph.inputs) if graph.inputs else [None]
-    execute(make_jobs(inputs, graph.pipeline, options.pop("no_clobber")), **options, command="run")
+    jobs = make_jobs(inputs, graph.pipeline, options.pop("no_clobber"), options["report"],
+                     [graph_path])  # fmt: skip
+    execute(jobs, **options, command="run")

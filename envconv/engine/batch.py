@@ -34,15 +34,16 @@ from typing import Any
 from .. import io
 from ..errors import EnvconvError, ImageIOError, UsageError
 from ..io import FORMATS
-from ..io.face_files import face_glob
+from ..io.face_files import face_glob, has_placeholder, literal_path
 from ..io.temps import is_temp_name
+from ..layouts import get_layout
 from .globs import glob_files
-from .outputs import check_outputs, input_files
-from .pipeline import Pipeline, Read, Resample, Write, path_variables
+from .outputs import REPORT, check_outputs, input_files
+from .pipeline import Pipeline, Read, Resample, Write, count_levels, path_variables
 
 __all__ = [
     "Job", "BatchResult", "BatchInterrupted", "MODES", "STATUSES", "expand_inputs", "make_jobs",
-    "run_job", "run_batch", "report_data", "write_report", "worker_threads",
+    "run_job", "run_batch", "report_data", "report_text", "write_report", "worker_threads",
 ]  # fmt: skip
 
 log = logging.getLogger(__name__)
@@ -119,26 +120,34 @@ def expand_inputs(patterns: Iterable[str]) -> list[str]:
 
 
 def make_jobs(
-    inputs: Iterable[str | None], pipeline: Pipeline, no_clobber: bool = False
+    inputs: Iterable[str | None],
+    pipeline: Pipeline,
+    no_clobber: bool = False,
+    report: str | os.PathLike | None = None,
+    also_read: Iterable[str | os.PathLike] = (),
 ) -> list[Job]:
     """One job per input, with relative write paths made absolute against the current
     directory, every write refusing existing files when ``no_clobber``.
 
     Raises UsageError, before any work, when an output is an input of the batch (any job's,
-    through links too), when two outputs share a path (in one job or across jobs), and with
-    ``no_clobber`` when an output exists (:mod:`envconv.engine.outputs`). Outputs whose path needs a
-    file header (``{size}`` without a resample size) are checked when their job runs.
+    or one of ``also_read``: the graph file; through links too), when two outputs share a
+    path (in one job or across jobs), and with ``no_clobber`` when an output exists
+    (:mod:`envconv.engine.outputs`). ``report`` (``--report``; ``"-"``: stdout) is one of
+    the outputs. Outputs whose path needs a file header (``{size}`` without a resample size)
+    are checked when their job runs.
     """
     steps = [_absolute_write(s, no_clobber) for s in pipeline.steps]
     rebased = Pipeline(steps, pipeline.variables)
     jobs = [Job(None if i is None else os.path.abspath(i), rebased) for i in inputs]
-    outputs, read = [], []
+    outputs, read = [], [os.path.abspath(p) for p in also_read]
     for job in jobs:
         for step in job.pipeline.bound(job.input):
             if isinstance(step, Read):
                 read += input_files(step.params["path"], step.params.get("layout"),
                                     step.params.get("faces"))  # fmt: skip
         outputs += [(path, refuse, job.name) for path, refuse in _static_outputs(job)]
+    if report is not None and os.fspath(report) != "-":
+        outputs.append((os.path.abspath(report), no_clobber, REPORT))
     check_outputs(outputs, read)
     return jobs
 
@@ -154,35 +163,44 @@ def _absolute_write(step, no_clobber: bool):
 def _static_outputs(job: Job) -> list[tuple[str, bool]]:
     """(path, no_clobber) of the outputs that follow from names alone (those that need a file
     header are left out), previews included."""
-    out, to, sized, variables = [], None, False, path_variables(job.input)
+    out, resample, variables = [], None, path_variables(job.input)
     for step in job.pipeline.bound(job.input):
         if isinstance(step, Read):
-            variables, to = path_variables(step.params["path"]), None
+            variables, resample = path_variables(step.params["path"]), None
         elif isinstance(step, Resample):
-            to, sized = step.params["to"], step.params["size"]
+            resample = step
         elif isinstance(step, Write):
             values = dict(variables)
-            if to is not None:
-                values["layout"] = to
-            if sized:
-                values["size"] = sized
+            if resample is not None:
+                values["layout"] = resample.params["to"]
+                if resample.params["size"]:
+                    values["size"] = resample.params["size"]
             for key in ("path", "preview") if step.params["preview"] else ("path",):
                 try:
                     path = step.target(values, key, job.pipeline.variables)
-                    files = _named_files(path, to, step.options.get("faces"))
+                    files = _named_files(path, resample, step.options.get("faces"), key)
                 except EnvconvError:
                     continue
                 out += [(f, step.params["no_clobber"]) for f in files]
     return out
 
 
-def _named_files(path: str, layout: str | None, faces) -> list[str]:
-    """The files of one write path when they follow from its name ({level} needs a header)."""
-    if "{level}" in path:
+def _named_files(path: str, resample: Resample | None, faces, key: str = "path") -> list[str]:
+    """The final files of one write path when they follow from its name and the resample
+    before it (a ``{level}`` count needs the size; without it, a file header)."""
+    if key == "preview" or not (has_placeholder(path, "level") or has_placeholder(path, "face")):
+        return [literal_path(path)]
+    if resample is None:
         return []
-    if "{face}" in path:
-        return [] if layout is None else io.output_paths(layout, path, faces=faces)
-    return [path]
+    levels = 1
+    if has_placeholder(path, "level"):
+        size, guard = resample.params["size"], resample.params["guard"]
+        if not size:
+            return []
+        layout = get_layout(resample.params["to"])
+        width, height = layout.file_size(int(size), 0 if guard == "fill" else int(guard))
+        levels = count_levels(width, height, resample.params["mips"])
+    return io.output_paths(resample.params["to"], path, levels, faces=faces)
 
 
 def worker_threads(jobs: int, cores: int | None = None) -> int:
@@ -383,14 +401,23 @@ def report_data(result: BatchResult) -> dict[str, Any]:
     }
 
 
-def write_report(path: str | os.PathLike, result: BatchResult) -> None:
-    """Write :func:`report_data` as JSON to ``path`` (through a temporary file and a rename)."""
+def report_text(result: BatchResult) -> str:
+    """:func:`report_data` as JSON text (what ``--report`` writes, ``--report -`` prints)."""
     import json
 
+    return json.dumps(report_data(result), indent=2) + "\n"
+
+
+def write_report(path: str | os.PathLike, result: BatchResult) -> None:
+    """Write :func:`report_text` to ``path`` through a temporary file and a rename, making
+    its folder if missing (:func:`make_jobs` checked the path against the output policy)."""
     from ..io import write_bytes
 
-    text = json.dumps(report_data(result), indent=2) + "\n"
+    path = os.fspath(path)
     try:
-        write_bytes(text.encode("utf-8"), os.fspath(path))
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        write_bytes(report_text(result).encode("utf-8"), path)
     except ImageIOError as exc:
         raise ImageIOError(f"report: {exc}") from None
+    except OSError as exc:
+        raise ImageIOError(f"report: cannot write {path}: {exc.strerror or exc}") from None

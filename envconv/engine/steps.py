@@ -29,7 +29,8 @@ __all__ = [
 #: Variables every ``Write`` path may use; ``{face}`` and ``{level}`` are io's own.
 VARIABLES = ("stem", "name", "ext", "dir", "layout", "size")
 _IO_PLACEHOLDERS = ("face", "level")
-_VARIABLE = re.compile(r"\{([^{}]*)\}")
+#: A ``{name}`` in a path template; doubled braces (``{{``, ``}}``) are literal ones.
+_VARIABLE = re.compile(r"\{\{|\}\}|\{([^{}]*)\}")
 #: ``Read`` options that prepare the source after reading (:func:`envconv.color.prepare.prepare_input`).
 PREPARE_OPTIONS = ("exposure", "fix_nonfinite", "clamp_negative")
 
@@ -211,18 +212,28 @@ class Output:
 
 
 def path_variables(input_path: str | os.PathLike | None) -> dict[str, str]:
-    """``stem``, ``name``, ``ext`` (without the dot) and ``dir`` of an input path."""
+    """``stem``, ``name``, ``ext`` (without the dot) and ``dir`` of an input path.
+
+    Values are file names as they are, their braces escaped (doubled) so that an output path
+    never expands a ``{level}`` or ``{face}`` of an input's name as its own. A ``{face}`` input
+    (a set of files) names its set: ``sky_{face}.hdr`` gives ``stem`` ``sky`` and ``name``
+    ``sky.hdr`` (the ``{face}`` and the ``_``, ``-`` or ``.`` before it dropped).
+    """
+    from ..io.face_files import escape_braces
+
     if input_path is None:
         return {}
-    path = os.fspath(input_path)
+    path = re.sub(r"[_.-]?\{face\}", "", os.fspath(input_path))
     name = os.path.basename(path)
     stem, ext = os.path.splitext(name)
-    return {"stem": stem, "name": name, "ext": ext.lstrip("."), "dir": os.path.dirname(path) or "."}
+    values = {"stem": stem, "name": name, "ext": ext.lstrip("."),
+              "dir": os.path.dirname(path) or "."}  # fmt: skip
+    return {key: escape_braces(value) for key, value in values.items()}
 
 
 def template_names(template: str) -> list[str]:
-    """Names of the ``{variables}`` in a path template."""
-    return _VARIABLE.findall(template)
+    """Names of the ``{variables}`` in a path template (doubled braces are no variable)."""
+    return [m.group(1) for m in _VARIABLE.finditer(template) if m.group(1) is not None]
 
 
 def expand_path(template: str, variables: dict[str, Any],
@@ -234,12 +245,12 @@ def expand_path(template: str, variables: dict[str, Any],
     (file names) are taken as they are, never expanded again.
     """
     if user:
-        template = _VARIABLE.sub(lambda m: user.get(m.group(1), m.group(0)), template)
+        template = _VARIABLE.sub(lambda m: user.get(m.group(1) or "", m.group(0)), template)
     known = {**(user or {}), **variables}
 
     def substitute(match: re.Match) -> str:
         name = match.group(1)
-        if name in _IO_PLACEHOLDERS:
+        if name is None or name in _IO_PLACEHOLDERS:  # an escaped brace, {face}, {level}
             return match.group(0)
         if name not in variables:
             names = ", ".join(f"{{{k}}}" for k in (*known, *_IO_PLACEHOLDERS))
@@ -268,6 +279,8 @@ def check_variables(user: dict[str, Any]) -> dict[str, str]:
 
         def substitute(match: re.Match) -> str:
             ref = match.group(1)
+            if ref is None:  # an escaped brace
+                return match.group(0)
             if ref in values:
                 return resolve(ref, (*trail, name))
             if ref in VARIABLES or ref in _IO_PLACEHOLDERS:

@@ -21,6 +21,7 @@ from typing import Any
 
 from .. import io
 from ..errors import EnvconvError, ImageIOError, UsageError
+from ..io.face_files import literal_path
 from ..layouts import get_layout
 from ..layouts.base import VIEW_OPTIONS
 from .checks import check_colorspace_name, check_conventions, check_levels, working_space
@@ -326,27 +327,21 @@ class Walk:
                              record.channels, self.source.pixel_type, working_space(),
                              **options)  # fmt: skip
         record.writes.append(plan)
-        preview = (
-            step.target(variables, "preview", self.variables) if step.params["preview"] else None
-        )
+        preview = None
+        if step.params["preview"]:  # one file: its braces are literal (io.face_files)
+            preview = literal_path(step.target(variables, "preview", self.variables))
         files = [*plan.files, *([preview] if preview else [])]
         self.targets += [(f, step.params["no_clobber"]) for f in files]
         if self.mode == "run":
             start = time.perf_counter()
-            files = self._write_env(step, latest.env, path, preview, options)
+            if step.params["makedirs"]:
+                _make_folders(path, files)
+            files = self._write_env(latest.env, path, preview, options)
             self._add_time("write", start, record)
         self.written.extend(files)
         record.files.extend(files)
 
-    def _write_env(self, step: Write, env, path: str, preview: str | None, options) -> list[str]:
-        targets = [path, *([preview] if preview else [])]
-        if step.params["makedirs"]:
-            for directory in {os.path.dirname(os.path.abspath(f)) for f in targets}:
-                try:
-                    os.makedirs(directory, exist_ok=True)
-                except OSError as exc:  # a regular file on the way, /proc, no permission
-                    raise ImageIOError(f"cannot write {path}: cannot make folder {directory}: "
-                                       f"{exc.strerror or exc}") from None  # fmt: skip
+    def _write_env(self, env, path: str, preview: str | None, options) -> list[str]:
         notes: list[str] = []
         files = io.write(env, path, warnings=notes, **options)
         self._warn(notes)
@@ -354,6 +349,17 @@ class Walk:
             files.append(_write_preview(env, preview))
         log.info("wrote %s", ", ".join(files))
         return files
+
+
+def _make_folders(path: str, files: list[str]) -> None:
+    """Make the missing folders of ``files``, the final names of a write to ``path`` (a
+    ``{face}`` in a folder name makes one folder per face)."""
+    for directory in dict.fromkeys(os.path.dirname(os.path.abspath(f)) for f in files):
+        try:
+            os.makedirs(directory, exist_ok=True)
+        except OSError as exc:  # a regular file on the way, /proc, no permission
+            raise ImageIOError(f"cannot write {path}: cannot make folder {directory}: "
+                               f"{exc.strerror or exc}") from None  # fmt: skip
 
 
 def _written_later(steps: list[Step], index: int) -> bool:
