@@ -220,3 +220,134 @@ def test_cli_writes_a_cube_dds(tmp_path):
     assert not stderr_lines(result)
     info, _ = read_container(out, tmp_path / "o.bin")
     assert info["cubemap"] and info["shape"] == [8, 8] and len(info["images"]) == 6 * 4
+
+
+# --- reading them back (envconv.io.dds.parse_dds, envconv.io.ktx2.parse_ktx2, io.textures) ---
+# Truth: the images the independent readers locate in the file (their bytes, in their order),
+# the chain in memory that was written, and CONVENTIONS' cell table (CELLS above).
+
+
+def _as_faces(env, layout):
+    """faces[f] of a map read back (RGB), cut by the cell table of its layout."""
+    n = env.size
+    out = []
+    for col, row, turns in CELLS[layout]:
+        out.append(np.rot90(env.pixels[row * n : (row + 1) * n, col * n : (col + 1) * n], turns))
+    return out
+
+
+CELLS["cube-hstrip"] = CELLS["cube-faces"]
+
+
+@pytest.mark.parametrize("ext", ["dds", "ktx2"])
+@pytest.mark.parametrize("depth", ["float", "half"])
+def test_cube_files_read_back_as_the_independent_readers_see_them(tmp_path, chain, ext, depth):
+    """Every level of a cube file read back by envconv holds, face by face, the images
+    parse-dds / ktx-parse find in the file (float), or the written chain rounded to half."""
+    path = tmp_path / f"sky.{ext}"
+    envconv.write(chain, path, bit_depth=depth)
+    stored = _faces(chain.levels)
+    if depth == "float":  # parse-dds refuses RGBA16F; ktx-parse reads both
+        _, data = read_container(path, tmp_path / "out.bin")
+        order = ([(f, k) for f in range(6) for k in range(LEVELS)] if ext == "dds" else
+                 [(f, k) for k in range(LEVELS) for f in range(6)])  # fmt: skip
+        at = 0
+        for f, k in order:
+            n = N >> k
+            stored[f][k] = _unpack(data[at : at + n * n * 16], (n, n, 4))
+            at += n * n * 16
+    for k in range(LEVELS):
+        env = envconv.read(path, level=k)
+        assert env.layout.name == "cube-hstrip" and env.size == N >> k  # no tag: faces in order
+        assert env.channels == ("R", "G", "B") and env.pixel_type == depth  # the added A dropped
+        for f, face in enumerate(_as_faces(env, "cube-hstrip")):
+            expected = stored[f][k][:, :, :3].astype(np.float16 if depth == "half" else np.float32)
+            np.testing.assert_array_equal(face, expected.astype(np.float32), err_msg=f"{f} {k}")
+
+
+@pytest.mark.parametrize("layout", ["cube-vcross", "cube-hcross", "cube-vstrip"])
+def test_a_ktx2_cube_reads_back_in_the_layout_it_was_written_from(tmp_path, layout):
+    cube = envconv.convert(_direction_latlong(), layout, size=N, mips=True, samples=4)
+    envconv.write(cube, tmp_path / "sky.ktx2")
+    for k in (0, 2, LEVELS - 1):
+        env = envconv.read(tmp_path / "sky.ktx2", level=k)
+        assert env.layout.name == layout and env.size == N >> k
+        cells = np.zeros(cube.levels[k].shape[:2], bool)  # the cells that hold faces
+        n = N >> k
+        for col, row, _ in CELLS[layout]:
+            cells[row * n : (row + 1) * n, col * n : (col + 1) * n] = True
+        np.testing.assert_array_equal(env.pixels[cells], cube.levels[k][cells])
+        np.testing.assert_array_equal(env.pixels[~cells], 0)
+
+
+def test_a_2d_ktx2_keeps_its_alpha_guard_and_layout(tmp_path):
+    sky = envconv.convert(_direction_latlong(), "paraboloid", size=16, alpha=True, guard=2)
+    envconv.write(sky, tmp_path / "p.ktx2")
+    back = envconv.read(tmp_path / "p.ktx2")
+    assert (back.layout.name, back.guard, back.size) == ("paraboloid", 2, 16)
+    assert back.channels == ("R", "G", "B", "A")
+    np.testing.assert_array_equal(back.pixels, sky.pixels)
+
+
+def _legacy_dds(path, pixels):
+    """An RGBA32F 2-D DDS with the legacy header (FourCC 116, D3DFMT_A32B32G32R32F, no DX10
+    extension) as Microsoft's "DDS_HEADER" page lays it out, made here without envconv."""
+    height, width = pixels.shape[:2]
+    pixel_format = struct.pack("<2I4s5I", 32, 0x4, struct.pack("<I", 116), 0, 0, 0, 0, 0)
+    header = struct.pack("<7I44x32s5I", 124, 0x1 | 0x2 | 0x4 | 0x1000, height, width, 0, 0, 0,
+                         pixel_format, 0x1000, 0, 0, 0, 0)  # fmt: skip
+    path.write_bytes(b"DDS " + header + pixels.astype("<f4").tobytes())
+
+
+def test_a_legacy_float_dds_reads(tmp_path):
+    pixels = np.random.default_rng(4).uniform(0, 3, (8, 16, 4)).astype(np.float32)
+    _legacy_dds(tmp_path / "old.dds", pixels)
+    env = envconv.read(tmp_path / "old.dds")
+    assert env.layout.name == "latlong" and env.channels == ("R", "G", "B", "A")
+    np.testing.assert_array_equal(env.pixels, pixels)
+
+
+@pytest.mark.parametrize("case, message", [
+    ("bc6h", "DXGI format 95 (BC6H_UF16) is not read"), ("cut", "cut short"),
+    ("ktx-basis", "supercompression scheme 1"),
+])  # fmt: skip
+def test_texture_files_envconv_does_not_read_fail_in_one_line(tmp_path, chain, case, message):
+    if case == "ktx-basis":
+        path = tmp_path / "sky.ktx2"
+        envconv.write(chain, path)
+        data = bytearray(path.read_bytes())
+        data[12 + 8 * 4 : 12 + 9 * 4] = struct.pack("<I", 1)  # supercompressionScheme
+    else:
+        path = tmp_path / "sky.dds"
+        envconv.write(chain, path)
+        data = bytearray(path.read_bytes())
+        if case == "bc6h":
+            data[128:132] = struct.pack("<I", 95)
+        else:
+            del data[len(data) // 2 :]
+    path.write_bytes(bytes(data))
+    result = run_cli(["convert", path, tmp_path / "o.exr", "--to", "latlong", "--size", "8"])
+    assert result.exit_code == 1 and result.stdout == ""
+    (line,) = stderr_lines(result)
+    assert line.startswith("envconv: error: cannot read") and message in line, line
+
+
+def test_info_and_convert_read_the_files_envconv_writes(tmp_path, chain):
+    """'Unsupported DXGI format' was all info and convert said of an envconv DDS."""
+    import json
+
+    envconv.write(chain, tmp_path / "sky.dds", bit_depth="half")
+    result = run_cli(["info", tmp_path / "sky.dds", "--json"])
+    assert result.exit_code == 0, result.stderr
+    record = json.loads(result.stdout)
+    assert (record["layout"], record["size"], record["pixel_type"]) == ("cube-hstrip", N, "half")
+    assert record["levels"] == [[6 * (N >> k), N >> k] for k in range(LEVELS)]
+    assert record["metadata"]["envconv:container"].startswith("DDS cube map, 6 faces of 16x16")
+    out = tmp_path / "back.exr"
+    result = run_cli(["convert", tmp_path / "sky.dds", out, "--to", "cube-hstrip", "--size",
+                      str(N), "--samples", "1"])  # fmt: skip
+    assert result.exit_code == 0, result.stderr
+    back = envconv.read(out)  # the same face grid: each texel read at its own centre
+    half = [f[0][:, :, :3].astype(np.float16).astype(np.float32) for f in _faces(chain.levels)]
+    for face, expected in zip(_as_faces(back, "cube-hstrip"), half, strict=True):
+        np.testing.assert_allclose(face, expected, atol=1e-6)

@@ -1,7 +1,10 @@
 """DirectDraw Surface (DDS) files with the DX10 header: float RGBA textures and cube maps.
 
-Only what envconv writes: uncompressed ``DXGI_FORMAT_R32G32B32A32_FLOAT`` (2) or
-``DXGI_FORMAT_R16G16B16A16_FLOAT`` (10), one 2-D texture or one cube map, with every mip level.
+envconv writes uncompressed ``DXGI_FORMAT_R32G32B32A32_FLOAT`` (2) or
+``DXGI_FORMAT_R16G16B16A16_FLOAT`` (10), one 2-D texture or one cube map, with every mip level;
+:func:`parse_dds` reads those, ``DXGI_FORMAT_R32G32B32_FLOAT`` (6) and the legacy D3DFMT codes
+of the same layouts (113 ``A16B16G16R16F``, 116 ``A32B32G32R32F``) back. Block-compressed
+formats (BC6H) and volume textures are refused with their name.
 The numbers below are those of Microsoft's DDS reference (learn.microsoft.com, "Direct3D DDS"):
 
 - File: the magic ``"DDS "`` (0x20534444), a ``DDS_HEADER`` (124 bytes), a ``DDS_HEADER_DXT10``
@@ -34,11 +37,16 @@ import struct
 
 import numpy as np
 
+from ..errors import ImageIOError
+from .formats import TextureInfo
+
 __all__ = [
     "DDS_MAGIC",
     "DXGI_FORMAT_R32G32B32A32_FLOAT",
     "DXGI_FORMAT_R16G16B16A16_FLOAT",
     "encode_dds",
+    "parse_dds",
+    "DDS_HEAD_BYTES",
 ]
 
 DDS_MAGIC = 0x20534444  # "DDS "
@@ -110,3 +118,61 @@ def encode_dds(faces: list[list[np.ndarray]], cube: bool, opaque: bool) -> bytes
                 raise ValueError(f"DDS level {k} is {level.shape} {level.dtype}, not {expected}")
             parts.append(np.ascontiguousarray(level, dtype=level.dtype.newbyteorder("<")).tobytes())
     return b"".join(parts)
+
+
+#: Bytes of a DDS file's header with its DX10 extension: all :func:`parse_dds` needs.
+DDS_HEAD_BYTES = 4 + 124 + 20
+DXGI_FORMAT_R32G32B32_FLOAT = 6
+#: (component dtype, components) of the uncompressed float formats read: DXGI codes, and the
+#: legacy D3DFMT FourCC numbers of the same layouts.
+_READ_DXGI = {DXGI_FORMAT_R32G32B32A32_FLOAT: ("<f4", 4), DXGI_FORMAT_R16G16B16A16_FLOAT: ("<f2", 4),
+              DXGI_FORMAT_R32G32B32_FLOAT: ("<f4", 3)}  # fmt: skip
+_READ_D3DFMT = {116: ("<f4", 4), 113: ("<f2", 4)}
+_DXGI_NAMES = {95: "BC6H_UF16", 96: "BC6H_SF16", 98: "BC7_UNORM", 71: "BC1_UNORM", 77: "BC3_UNORM",
+               28: "R8G8B8A8_UNORM", 24: "R10G10B10A2_UNORM", 26: "R11G11B10_FLOAT"}  # fmt: skip
+
+
+def parse_dds(head: bytes, path: str = "DDS file") -> TextureInfo:
+    """The :class:`~envconv.io.formats.TextureInfo` of a DDS file from its first
+    :data:`DDS_HEAD_BYTES` bytes; ImageIOError (one line) for what is not read."""
+    if len(head) < 128 or struct.unpack_from("<I", head)[0] != DDS_MAGIC:
+        raise ImageIOError(f"cannot read {path}: not a DDS file")
+    size, flags, height, width, _, depth, mips = struct.unpack_from("<7I", head, 4)
+    pf_flags, fourcc = struct.unpack_from("<I4s", head, 80)  # DDS_PIXELFORMAT at 76
+    caps, caps2 = struct.unpack_from("<2I", head, 108)
+    cube = bool(caps2 & DDSCAPS2_CUBEMAP)
+    opaque, offset = False, 128
+    if fourcc == b"DX10":
+        if len(head) < DDS_HEAD_BYTES:
+            raise ImageIOError(f"cannot read {path}: its DX10 header is cut short")
+        code, dimension, misc, array, alpha_mode = struct.unpack_from("<5I", head, 128)
+        found = _READ_DXGI.get(code)
+        what = f"DXGI format {code} ({_DXGI_NAMES.get(code, 'unknown')})"
+        cube = cube or bool(misc & DDS_RESOURCE_MISC_TEXTURECUBE)
+        opaque, offset = alpha_mode == DDS_ALPHA_MODE_OPAQUE, DDS_HEAD_BYTES
+        if dimension != DDS_DIMENSION_TEXTURE2D:
+            found, what = None, f"resource dimension {dimension} (not a 2-D texture)"
+    else:
+        code = struct.unpack("<I", fourcc)[0]
+        found = _READ_D3DFMT.get(code) if pf_flags & DDPF_FOURCC else None
+        what = f"pixel format {fourcc!r}" if pf_flags & DDPF_FOURCC else "an integer pixel format"
+    if found is None:
+        raise ImageIOError(f"cannot read {path}: {what} is not read by envconv; it reads "
+                           "uncompressed RGBA16F, RGBA32F and RGB32F DDS files")  # fmt: skip
+    if (
+        cube
+        and (caps2 & DDSCAPS2_CUBEMAP_ALLFACES) != DDSCAPS2_CUBEMAP_ALLFACES
+        and fourcc != b"DX10"
+    ):
+        raise ImageIOError(f"cannot read {path}: a cube map without all six faces")
+    if depth > 1 and not cube:
+        raise ImageIOError(f"cannot read {path}: a volume texture (depth {depth})")
+    dtype, components = found
+    levels = max(int(mips), 1) if (flags & DDSD_MIPMAPCOUNT or caps & DDSCAPS_MIPMAP) else 1
+    texel = np.dtype(dtype).itemsize * components
+    images = {}
+    for face in range(6 if cube else 1):  # each face: its main image, then its mip levels
+        for k in range(levels):
+            images[(face, k)] = offset
+            offset += max(height >> k, 1) * max(width >> k, 1) * texel
+    return TextureInfo("dds", width, height, levels, cube, dtype, components, opaque, images, {})

@@ -39,7 +39,7 @@ from .exr import read_exr_pixels as _read_exr_pixels
 from .formats import FORMATS
 
 __all__ = ["read_file", "read_file_header", "read_image", "read_pixel_type",
-           "FileHeader", "FileImage", "Part", "FORMATS", "limit_threads"]  # fmt: skip
+           "FileHeader", "FileImage", "Part", "FORMATS", "limit_threads", "deep_samples"]  # fmt: skip
 
 log = logging.getLogger(__name__)
 
@@ -189,8 +189,9 @@ def _part(spec, index: int) -> Part:
     )
 
 
-def _header(inp, path: str, level: int, part: str | int | None) -> FileHeader:
-    """Every part's facts at MIP ``level``, and the choice of parts to read."""
+def _header(inp, path: str, level: int, part: str | int | None, deep: bool = False) -> FileHeader:
+    """Every part's facts at MIP ``level``, and the choice of parts to read; a first part of
+    deep data is refused unless ``deep``."""
     parts, metadata = [], None
     while inp.seek_subimage(len(parts), 0):
         index = len(parts)
@@ -211,9 +212,12 @@ def _header(inp, path: str, level: int, part: str | int | None) -> FileHeader:
         metadata = {a.name: a.value for a in inp.spec().extra_attribs}
     header = FileHeader(path, inp.format_name(), level, tuple(parts), chosen, skipped,
                         _tags_from_description(metadata or {}))  # fmt: skip
-    if header.first.deep:
-        raise ImageIOError(f"cannot read {path}: part {header.first.name or 0} holds deep data, "
-                           "not an image; pick another with --part")  # fmt: skip
+    if header.first.deep and not deep:
+        flat = [p.name or str(p.index) for p in found if not p.deep]
+        fix = (f"pick a flat part with --part ({', '.join(flat)})" if flat else
+               f"flatten it first, e.g. oiiotool {path} --flatten -o flat.exr")  # fmt: skip
+        raise ImageIOError(f"cannot read {path}: part {header.first.name or 0} holds deep data "
+                           f"(any number of samples per pixel), not an image; {fix}")  # fmt: skip
     return header
 
 
@@ -248,16 +252,72 @@ def _choose(path, fmt, parts, wanted) -> tuple[tuple[int, ...], tuple[tuple[str,
     return tuple(chosen), tuple(skipped)
 
 
-def read_file_header(path: str | os.PathLike, level: int = 0, part: str | int | None = None):
-    """The :class:`FileHeader` of ``path`` at MIP ``level``, without its pixels."""
+def read_file_header(path: str | os.PathLike, level: int = 0, part: str | int | None = None,
+                     deep: bool = False):  # fmt: skip
+    """The :class:`FileHeader` of ``path`` at MIP ``level``, without its pixels; a file whose
+    first part (or ``part``) holds deep data is refused unless ``deep``."""
+    path = os.fspath(path)
+    info = _texture_info(path)
+    if info is not None:
+        return _texture_header(path, info, level, part)
+    with _open_input(path) as inp:
+        return _header(inp, path, level, part, deep)
+
+
+def deep_samples(path: str | os.PathLike, part: int = 0, level: int = 0) -> tuple[int, int]:
+    """(fewest, most) samples a pixel of deep part ``part`` holds (reads the deep data)."""
     path = os.fspath(path)
     with _open_input(path) as inp:
-        return _header(inp, path, level, part)
+        deep = inp.read_native_deep_image(part, level)
+        if deep is None or inp.has_error:
+            raise ImageIOError(f"cannot read {path}: {_first_line(inp.geterror())}")
+    counts = np.fromiter((deep.samples(i) for i in range(deep.pixels)), np.int64, deep.pixels)
+    return (int(counts.min()), int(counts.max())) if counts.size else (0, 0)
+
+
+#: The first bytes of the texture files envconv reads itself (io.dds, io.ktx2): OpenImageIO
+#: reads no float DDS and no KTX2.
+_TEXTURE_MAGIC = (b"DDS ", bytes([0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB]))
+
+
+def _texture_info(path: str):
+    """The TextureInfo of a DDS or KTX2 file (:mod:`envconv.io.textures`), else None."""
+    try:
+        with open(path, "rb") as handle:
+            head = handle.read(8)
+    except OSError:
+        return None
+    if not any(head.startswith(magic) for magic in _TEXTURE_MAGIC):
+        return None
+    from .textures import texture_info
+
+    return texture_info(path)
+
+
+def _texture_header(path: str, info, level: int, part) -> FileHeader:
+    """A texture file's header as a one-part image (:mod:`envconv.io.textures`)."""
+    from .textures import texture_channels, texture_layout, texture_size
+
+    if part not in (None, 0, "0"):
+        raise ImageIOError(f"{path} has no part {str(part)!r}; its parts: 0")
+    if not 0 <= level < info.levels:
+        raise ImageIOError(f"cannot read {path}: it has no MIP level {level}")
+    channels = texture_channels(info)
+    window = (0, 0, *texture_size(info, level))
+    pixel_type = "half" if info.dtype.endswith("2") else "float"
+    first = Part(0, "", channels, (pixel_type,) * len(channels), window, window)
+    return FileHeader(path, info.format, level, (first,), (0,), (), texture_layout(info)[1])
 
 
 def read_file(path: str | os.PathLike, level: int = 0, part: str | int | None = None) -> FileImage:
     """Read an image file over its display window (see the module docstring)."""
     path = os.fspath(path)
+    info = _texture_info(path)
+    if info is not None:
+        from .textures import texture_pixels
+
+        header = _texture_header(path, info, level, part)
+        return FileImage(header, texture_pixels(path, info, level), None)
     oiio = _oiio()
     # Alpha is a validity mask, never a compositing alpha: read colour exactly as stored, so
     # OIIO does not premultiply unassociated alpha (PNG, TIFF) on the way in.

@@ -6,11 +6,12 @@ No file is touched here: the tables the readers, the writers and the output plan
 from __future__ import annotations
 
 import os
+from typing import NamedTuple
 
 from ..errors import UsageError
 
 __all__ = ["COMPRESSIONS", "check_compression", "FORMATS", "CONTAINER_FORMATS", "WRITE_FORMATS", "extension",
-           "format_of", "choose_pixel_type"]  # fmt: skip
+           "format_of", "choose_pixel_type", "TextureInfo"]  # fmt: skip
 
 #: Extension → (OIIO format, allowed pixel types, default for float sources, max channels).
 FORMATS = {
@@ -27,7 +28,7 @@ FORMATS = {
 }
 
 
-#: Texture containers envconv writes itself, never reads (:mod:`envconv.io.textures`), as above.
+#: Texture containers envconv writes and reads itself (:mod:`envconv.io.textures`), as above.
 CONTAINER_FORMATS = {
     ".dds": ("dds", ("half", "float"), None, 4),
     ".ktx2": ("ktx2", ("half", "float"), None, 4),
@@ -101,3 +102,27 @@ def check_compression(fmt: str, compression: str | None) -> str | None:
     shown = ", ".join(c.rstrip(":") for c in choices)
     raise UsageError(f"unknown {fmt} compression {compression!r}; choose one of {shown} "
                      "(zip, zips, dwaa and dwab take a level, e.g. dwaa:45)")  # fmt: skip
+
+
+class TextureInfo(NamedTuple):
+    """What a DDS or KTX2 header says (:func:`envconv.io.dds.parse_dds`,
+    :func:`envconv.io.ktx2.parse_ktx2`), enough to find every image without reading one.
+
+    ``dtype`` is the stored component type (little-endian float16 or float32), ``components``
+    3 or 4 (RGB or RGBA), ``opaque`` True when the alpha is a constant added for the format.
+    ``images[(face, level)]`` is the byte offset of that image (``max(height >> k, 1)`` rows
+    of ``max(width >> k, 1)`` texels, top row first after ``flip``, which is True for rows
+    stored bottom first). ``metadata`` holds the file's key/value text (KTX2).
+    """
+
+    format: str
+    width: int
+    height: int
+    levels: int
+    cube: bool
+    dtype: str
+    components: int
+    opaque: bool
+    images: dict
+    metadata: dict
+    flip: bool = False

@@ -1,7 +1,9 @@
 """KTX 2.0 files: uncompressed float RGBA textures and cube maps with every mip level.
 
-Only what envconv writes: ``VK_FORMAT_R32G32B32A32_SFLOAT`` (109) or
-``VK_FORMAT_R16G16B16A16_SFLOAT`` (97), no supercompression, one 2-D texture or one cube map.
+envconv writes ``VK_FORMAT_R32G32B32A32_SFLOAT`` (109) or ``VK_FORMAT_R16G16B16A16_SFLOAT``
+(97), no supercompression, one 2-D texture or one cube map; :func:`parse_ktx2` reads those and
+the RGB float formats (``R32G32B32_SFLOAT`` 106, ``R16G16B16_SFLOAT`` 90) back, of the first
+array layer. Block-compressed and supercompressed files (Basis, BC6H) are refused by name.
 Section names are those of the KTX File Format Specification 2.0 (Khronos, ``ktxspec.adoc``):
 
 - "File Structure": the 12-byte identifier ``«KTX 20»\\r\\n\\x1A\\n``; nine UInt32 (vkFormat,
@@ -37,12 +39,17 @@ import struct
 
 import numpy as np
 
+from ..errors import ImageIOError
+from .formats import TextureInfo
+
 __all__ = [
     "KTX2_IDENTIFIER",
     "VK_FORMAT_R32G32B32A32_SFLOAT",
     "VK_FORMAT_R16G16B16A16_SFLOAT",
     "encode_ktx2",
     "basic_dfd",
+    "parse_ktx2",
+    "ktx2_head_bytes",
 ]
 
 KTX2_IDENTIFIER = bytes([0xAB, 0x4B, 0x54, 0x58, 0x20, 0x32, 0x30, 0xBB, 0x0D, 0x0A, 0x1A, 0x0A])
@@ -150,3 +157,62 @@ def encode_ktx2(faces: list[list[np.ndarray]], cube: bool, writer: str,
         6 if cube else 1, levels, 0, dfd_offset, len(dfd), kvd_offset, len(kvd), 0, 0,
     )  # fmt: skip
     return b"".join([head, *index, dfd, kvd, *body])
+
+
+#: (component dtype, components) of the float formats read, by vkFormat.
+_READ_VK = {VK_FORMAT_R32G32B32A32_SFLOAT: ("<f4", 4), VK_FORMAT_R16G16B16A16_SFLOAT: ("<f2", 4),
+            106: ("<f4", 3), 90: ("<f2", 3)}  # fmt: skip
+_HEAD = 12 + 9 * 4 + 4 * 4 + 2 * 8  # identifier, header, index: the level index follows
+
+
+def ktx2_head_bytes(first: bytes) -> int:
+    """How many bytes :func:`parse_ktx2` needs (up to the end of the Key/Value Data), from
+    the file's first 80 bytes."""
+    levels = max(struct.unpack_from("<I", first, 12 + 7 * 4)[0], 1)
+    kvd_offset, kvd_length = struct.unpack_from("<2I", first, 12 + 9 * 4 + 8)
+    return max(_HEAD + 24 * levels, kvd_offset + kvd_length)
+
+
+def parse_ktx2(head: bytes, path: str = "KTX2 file") -> TextureInfo:
+    """The :class:`~envconv.io.formats.TextureInfo` of a KTX2 file from its first
+    :func:`ktx2_head_bytes` bytes; ImageIOError (one line) for what is not read."""
+    if len(head) < _HEAD or head[:12] != KTX2_IDENTIFIER:
+        raise ImageIOError(f"cannot read {path}: not a KTX2 file")
+    vk, _, width, height, depth, layers, faces, levels, scheme = struct.unpack_from("<9I", head, 12)
+    found = _READ_VK.get(vk)
+    if found is None or scheme:
+        what = f"supercompression scheme {scheme}" if scheme else f"vkFormat {vk}"
+        raise ImageIOError(f"cannot read {path}: {what} is not read by envconv; it reads "
+                           "uncompressed RGBA and RGB float KTX2 files")  # fmt: skip
+    if depth > 1 or faces not in (1, 6) or height == 0:
+        raise ImageIOError(f"cannot read {path}: a {'3-D' if depth > 1 else '1-D'} texture or "
+                           f"{faces} faces, not a 2-D texture or a cube map")  # fmt: skip
+    levels = max(levels, 1)
+    dtype, components = found
+    texel = np.dtype(dtype).itemsize * components
+    images = {}
+    for k in range(levels):  # a level: each layer's faces in turn; layer 0 is read
+        start = struct.unpack_from("<Q", head, _HEAD + 24 * k)[0]
+        size = max(height >> k, 1) * max(width >> k, 1) * texel
+        for face in range(faces):
+            images[(face, k)] = start + face * size
+    metadata = _read_key_values(head, *struct.unpack_from("<2I", head, 12 + 9 * 4 + 8))
+    opaque = metadata.get("envconv:channels", "RGBA") != "RGBA" and components == 4
+    flip = metadata.get("KTXorientation", "rd")[1:2] == "u"
+    return TextureInfo("ktx2", width, height, levels, faces == 6, dtype, components, opaque,
+                       images, metadata, flip)  # fmt: skip
+
+
+def _read_key_values(data: bytes, offset: int, length: int) -> dict[str, str]:
+    """The Key/Value Data as text (values that are not UTF-8 text are left out)."""
+    pairs, at, end = {}, offset, offset + length
+    while at + 4 <= end:
+        size = struct.unpack_from("<I", data, at)[0]
+        entry = data[at + 4 : at + 4 + size]
+        at += 4 + size + (-size % 4)
+        key, _, value = entry.partition(b"\0")
+        try:
+            pairs[key.decode("utf-8")] = value.rstrip(b"\0").decode("utf-8")
+        except UnicodeDecodeError:
+            continue
+    return pairs

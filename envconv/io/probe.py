@@ -87,8 +87,12 @@ def probe(path: str | os.PathLike, layout: str | None = None, level: int = 0,
     path = os.fspath(path)
     if "{face}" in path:
         return _probe_faces(path, layout, level, part)
+    header = read_file_header(path, level, part, deep=True)
+    if header.first.deep:  # described, never read as a map (files.py says why)
+        return Probe(path, (path,), header, header.width, header.height, header.channels,
+                     ((header.width, header.height),), None, None, None, (),
+                     "deep data: any number of samples per pixel, not an image")  # fmt: skip
     width, height, channels, metadata = read_header(path, level, part)
-    header = read_file_header(path, level, part)
     found, size, guard = None, None, None
     if layout is not None:
         candidates, reason = (get_layout(layout).name,), "given by --from"

@@ -233,7 +233,13 @@ def mip_levels(path: str | os.PathLike, part: str | None = None) -> list[tuple[i
     from .face_files import first_file
 
     path = first_file(path)
-    index = read_file_header(path, 0, part).chosen[0]
+    header = read_file_header(path, 0, part)
+    if header.format in ("dds", "ktx2"):  # envconv's own reader (envconv.io.textures)
+        from .textures import texture_info, texture_size
+
+        info = texture_info(path)
+        return [texture_size(info, k) for k in range(info.levels)]
+    index = header.chosen[0]
     with _open_input(path) as inp:
         sizes: list[tuple[int, int]] = []
         while inp.seek_subimage(index, len(sizes)):

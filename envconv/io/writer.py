@@ -128,7 +128,9 @@ def _write_container(envmap: EnvMap, path: str, fmt: str, levels: list[np.ndarra
 
     check_write(envmap.layout, path, guard=envmap.guard)
     images, cube = texture_images(envmap.layout, levels, envmap.alpha_index)
-    extra = {"envconv:layout": envmap.layout.name}
+    extra = {"envconv:layout": envmap.layout.name, "envconv:size": str(envmap.size),
+             "envconv:guard": str(envmap.guard),
+             "envconv:channels": "RGB" if envmap.alpha_index is None else "RGBA"}  # fmt: skip
     if envmap.layout.view:
         extra[VIEW_TAG] = view_text(envmap.layout.view_options)
     if "envconv:roughness" in envmap.metadata:

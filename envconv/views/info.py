@@ -59,6 +59,10 @@ def describe(path: str, layout: str | None = None, level: int = 0, part: str | N
     ``nonfinite`` (count of NaN/Inf values) and ``mean_radiance`` (None for an image no
     layout fits), in the working space as :func:`envconv.io.read` gives the pixels.
 
+    ``deep`` says whether the part described holds deep data; then ``samples_per_pixel`` is
+    the [fewest, most] samples of a pixel (read from the deep data), the layout is ``unknown``
+    (envconv reads no deep data as a map) and the ``stats`` values are None.
+
     ``size`` and ``guard`` are N and G of the level read (G >> level for a MIP level), None
     for an unknown layout; ``levels`` lists [width, height] of every MIP level's display
     window, level 0 first; windows are [x, y, width, height]. ``colorspace`` and
@@ -90,12 +94,19 @@ def describe(path: str, layout: str | None = None, level: int = 0, part: str | N
         "channels": list(found.channels),
         "channel_types": _types(found.channels, header),
         "pixel_type": header.pixel_type,
+        "deep": header.first.deep,
         "parts": _parts(header),
         "colorspace": input_colorspace_of(header.metadata, header.pixel_type),  # the file's
         "metadata": {k: (v if isinstance(v, (int, float, str)) else list(v))
                      for k, v in header.metadata.items()},
     }  # fmt: skip
-    if stats:
+    if header.first.deep:  # the only pixel data info reads without --stats: sample counts
+        from ..io.files import deep_samples
+
+        record["samples_per_pixel"] = list(deep_samples(path, header.chosen[0], level))
+    if stats and header.first.deep:  # no image to take statistics of
+        record.update(dict.fromkeys(("min", "max", "nonfinite", "mean_radiance")))
+    elif stats:
         record.update(_stats(path, found, layout, level, part))
     return record
 
