@@ -20,17 +20,29 @@ NODE_DIR = os.path.join(os.path.dirname(__file__), "node")
 
 
 def _ready() -> str:
+    """node, with the packages installed; test processes running side by side (pytest-xdist)
+    install them once, one at a time: a second ``npm ci`` or a read of a half-installed
+    package made a reader fail with "Cannot find package"."""
+    import fcntl
+
     node = shutil.which("node")
     if node is None:
         pytest.skip("node is not installed: the DDS/KTX2 files cannot be read by npm readers")
-    if not os.path.isdir(os.path.join(NODE_DIR, "node_modules", "ktx-parse")):
-        npm = shutil.which("npm")
-        if npm is None:
-            pytest.fail("node is installed but npm is not: cannot install tests/node")
-        done = subprocess.run([npm, "ci", "--no-audit", "--no-fund"], cwd=NODE_DIR,
-                              capture_output=True, text=True, timeout=600)  # fmt: skip
-        if done.returncode:
-            pytest.fail(f"npm ci in tests/node failed: {done.stderr.strip()[-500:]}")
+    ready = os.path.join(NODE_DIR, "node_modules", ".envconv-installed")
+    if os.path.exists(ready):
+        return node
+    with open(os.path.join(NODE_DIR, "package-lock.json"), "rb") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)  # held until the install is whole
+        if not os.path.exists(ready):
+            npm = shutil.which("npm")
+            if npm is None:
+                pytest.fail("node is installed but npm is not: cannot install tests/node")
+            done = subprocess.run([npm, "ci", "--no-audit", "--no-fund"], cwd=NODE_DIR,
+                                  capture_output=True, text=True, timeout=600)  # fmt: skip
+            if done.returncode:
+                pytest.fail(f"npm ci in tests/node failed: {done.stderr.strip()[-500:]}")
+            with open(ready, "w") as marker:
+                marker.write("npm ci done\n")
     return node
 
 
