@@ -133,8 +133,8 @@ def make_jobs(
     or one of ``also_read``: the graph file; through links too), when two outputs share a
     path (in one job or across jobs), and with ``no_clobber`` when an output exists
     (:mod:`envconv.engine.outputs`). ``report`` (``--report``; ``"-"``: stdout) is one of
-    the outputs. Outputs whose path needs a file header (``{size}`` without a resample size)
-    are checked when their job runs.
+    the outputs. Outputs whose path needs a file header (``{size}`` or ``{level}`` without a
+    resample size) are checked when their job runs.
     """
     steps = [_absolute_write(s, no_clobber) for s in pipeline.steps]
     rebased = Pipeline(steps, pipeline.variables)
