@@ -1424,6 +1424,9 @@ def test_report_dash_writes_the_json_on_stdout(tmp_path):
     assert [r["status"] for r in data["files"]] == ["done"]
     assert run.stderr_lines[-1].startswith("1 files: 1 done"), run.stderr
     assert not (tmp_path / "-").exists()
+    both = envconv("batch", source, "--out", tmp_path / "out" / "{stem}.exr", "--report", "-",
+                   "--json", "resample", "--to", "latlong", "--size", 8)  # fmt: skip
+    assert_failed_cleanly(both, 2, tmp_path, message="--report - and --json")
 
 
 def test_braces_in_an_input_name_stay_literal_in_outputs(tmp_path):
