@@ -15,6 +15,8 @@ renamed into place as one set.
   written by OpenImageIO, whose ``open``, band writes and ``close`` return False on a failed
   write (tests/test_hostile.py, full disk). ``has_error`` is no test: the TIFF writer leaves
   a message there on success ("failed TIFFWriteCustomDirectory() of the Exif data").
+  TGA's writer seeks and ignores a failed write: its file is checked once closed
+  (:data:`CHECKED_AFTER`: the TGA 2.0 footer it writes last, and its reader opening it).
 * :func:`write_bytes`: bytes made in memory (DDS, KTX2, JSON reports, HTML pages).
 """
 
@@ -30,10 +32,21 @@ from .formats import format_of
 from .sets import clean_folder, replace_files
 from .temps import discard, new_token, temp_for
 
-__all__ = ["write_files", "write_images", "write_bytes", "STREAMED", "WRITE_BAND_BYTES"]
+__all__ = [
+    "write_files",
+    "write_images",
+    "write_bytes",
+    "STREAMED",
+    "CHECKED_AFTER",
+    "WRITE_BAND_BYTES",
+]
 
 #: OpenImageIO formats whose encoders write front to back: written through a pipe.
 STREAMED = ("png", "jpeg", "hdr")
+#: Formats whose OpenImageIO writer seeks (no pipe) and ignores a failed write: checked once
+#: closed, by what a whole file ends with. TGA: rows stored bottom-up by seeking, and the
+#: TGA 2.0 footer written last.
+CHECKED_AFTER = {"targa": b"TRUEVISION-XFILE.\0"}
 _CLEANED: set[str] = set()
 
 #: Bytes of pixels handed to OIIO per call. One whole-image ``write_image`` made OIIO's PNG
@@ -89,6 +102,28 @@ def write_images(temp: str, target: str, writes) -> None:
             _write_streamed(temp, target, writes, fmt)
         else:
             _write_all(temp, target, writes)
+        if fmt in CHECKED_AFTER:
+            _check_whole(temp, target, fmt)
+
+
+def _check_whole(temp: str, target: str, fmt: str) -> None:
+    """Refuse a file of :data:`CHECKED_AFTER` whose end is not the format's, or that its
+    reader will not open (OpenImageIO's TGA reader compares the header's image size with the
+    file's): what a failed write the writer ignored leaves."""
+    ending = CHECKED_AFTER[fmt]
+    try:
+        with open(temp, "rb") as handle:
+            handle.seek(max(0, os.fstat(handle.fileno()).st_size - len(ending)))
+            whole = handle.read() == ending
+    except OSError as exc:
+        raise ImageIOError(f"cannot write {target}: {exc.strerror or exc}") from None
+    oiio = _oiio()
+    inp = oiio.ImageInput.open(temp) if whole else None
+    if inp is None:
+        oiio.geterror()  # clear the reader's message
+        raise ImageIOError(f"cannot write {target}: the file written is incomplete "
+                           "(the disk full, or a file size limit)")  # fmt: skip
+    inp.close()
 
 
 def _write_streamed(temp: str, target: str, writes, fmt: str) -> None:
