@@ -24,7 +24,7 @@ __all__ = ["FILTERS", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto
            "output_channels", "check_size", "check_output", "output_layout"]  # fmt: skip
 
 #: Reconstruction filters by name → kernel code.
-FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2}
+FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2, "area": 3}
 MAX_SAMPLES = 32
 #: How a GGX chain's levels get their roughness (:func:`envconv.resample.ibl.roughness_levels`).
 ROUGHNESS_MAPPINGS = ("gltf", "filament", "unreal")

@@ -14,6 +14,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "area.h"
 #include "ibl.h"
 #include "kernels.h"
 #include "parallel.h"
@@ -92,7 +93,7 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
         throw std::invalid_argument("source array does not match its layout's size");
     if (int64_t(src.shape(2)) != nch || int64_t(rip.shape(2)) != nch)
         throw std::invalid_argument("source and output channel counts differ");
-    if (filter < envconv::kNearest || filter > envconv::kBicubic)
+    if (filter < envconv::kNearest || filter > envconv::kArea)
         throw std::invalid_argument("unknown filter code");
     bool has_alpha = alpha.is_valid(), has_weights = weights.is_valid();
     if (coverage_channel && (has_alpha || nch < 1))
@@ -114,6 +115,10 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
     envconv::Image image = make_image(src);
     int64_t* counter = progress.is_valid() ? progress.data() : nullptr;
     nb::gil_scoped_release release;
+    if (filter == envconv::kArea) {
+        envconv::resample_area(image, cv, samples, o, threads, counter);
+        return;
+    }
     envconv::resample(image, rips, cv, samples, filter, o, threads, counter);
 }
 
@@ -387,6 +392,7 @@ NB_MODULE(_core, m) {
     // Stop (true) every running kernel at its next task, or let kernels run again (false).
     m.def("cancel", [](bool on) { envconv::cancel_requested.store(on); }, "on"_a);
     m.def("set_wide_rows", &envconv::set_wide_rows, "allowed"_a);
+    m.def("set_area_direct", &envconv::set_area_direct, "allowed"_a);
     m.attr("IBL_NODE_FIELDS") = envconv::Pyramid::kFields;
     m.def("ibl_pyramid_floats", &envconv::Pyramid::floats_for, "p"_a, "channels"_a,
           "Floats of the pyramid of a p-cube with `channels` channels (src/core/ibl.h).");

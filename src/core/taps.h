@@ -16,7 +16,9 @@
 
 namespace envconv {
 
-enum FilterCode : int { kNearest = 0, kBilinear = 1, kBicubic = 2 };
+// kArea integrates the box reconstruction over each pixel's footprint (area.h); the others
+// read the source at sub-sample points.
+enum FilterCode : int { kNearest = 0, kBilinear = 1, kBicubic = 2, kArea = 3 };
 
 // A read-only (H, W, C) float32 image, C-contiguous.
 struct Image {

@@ -1,0 +1,518 @@
+// The area filter: every output pixel is the solid-angle mean of the box-reconstructed source
+// over the pixel's footprint, integrated exactly.
+//
+// The footprint of an output pixel is the region of the source that its directions come from.
+// Its corners' source points are shared with the neighbouring pixels, so the footprints tile
+// the source; each is integrated over the texel grid exactly (green.h), each texel's piece
+// weighted by the solid angle it holds (area_source.h). Every texel's solid angle is thus
+// handed out exactly once, to the pixels that cover it: a one-texel sun keeps its energy in
+// any conversion, a constant map stays constant, and nothing aliases.
+//
+// Work is split into bands of kTile output rows, as the point kernel's is.
+#include <algorithm>
+#include <atomic>
+#include <cmath>
+#include <vector>
+
+#include "area.h"
+#include "area_prefix.h"
+#include "area_slow.h"
+#include "area_tiles.h"
+#include "parallel.h"
+#include "tiles.h"
+
+namespace envconv {
+namespace {
+
+std::atomic<bool> direct_allowed{true};
+
+// Tiles are kAreaTileWidth x kTile pixels (bands of kTile rows, as the point kernel's).
+constexpr int64_t kAreaTileWidth = 32;
+
+struct AreaJob {
+    const Conversion& cv;
+    const SourceModel& model;
+    const Singular& sing;
+    const ResampleOutput& out;
+    int samples;  // sub-pixels per edge, each integrated exactly
+};
+
+// The exact coverage of pixel (i, j) when an alpha plane is wanted (else 0, unused).
+double pixel_coverage(const Conversion& cv, const ResampleOutput& out, int64_t i, int64_t j) {
+    if (!out.alpha) return 0.0;
+    return rect_coverage(cv.dst, double(i) * cv.scale_x, double(j) * cv.scale_y,
+                         double(i + 1) * cv.scale_x, double(j + 1) * cv.scale_y);
+}
+
+// Store pixel (i, j) from its signed sums: solid angle w and colour times solid angle acc.
+void store_sums(const ResampleOutput& out, int64_t i, int64_t j, double w, const double* acc,
+                double coverage) {
+    const int64_t nch = out.channels;
+    float* px = out.pixels + (j * out.width + i) * (out.stride ? out.stride : nch);
+    const bool held = w != 0.0 && std::isfinite(w);
+    const double inv = held ? 1.0 / w : 0.0;
+    for (int64_t c = 0; c < nch; ++c) px[c] = held ? float(acc[c] * inv) : 0.0f;
+    if (out.alpha) out.alpha[(j * out.width + i) * out.alpha_stride] = float(coverage);
+    if (out.weights) out.weights[j * out.width + i] = float(std::fabs(w));
+}
+
+// Store pixel (i, j): its colour (the sums normalised), coverage and solid angle.
+void store_pixel(const ResampleOutput& out, int64_t i, int64_t j, const PixelSums& s,
+                 double coverage) {
+    const int64_t nch = out.channels;
+    float* px = out.pixels + (j * out.width + i) * (out.stride ? out.stride : nch);
+    double inv = s.weight > 0.0 ? 1.0 / s.weight : 0.0;
+    for (int64_t c = 0; c < nch; ++c) px[c] = s.weight > 0.0 ? float(s.acc[c] * inv) : 0.0f;
+    if (out.alpha) out.alpha[(j * out.width + i) * out.alpha_stride] = float(coverage);
+    if (out.weights) out.weights[j * out.width + i] = float(std::max(s.weight, 0.0));
+}
+
+// Every pixel of [i0, i1) x [j0, j1), one at a time through the general path.
+void slow_block(const AreaJob& job, SlowPath& sp, PixelSums& sums, int64_t i0, int64_t j0,
+                int64_t i1, int64_t j1) {
+    const Conversion& cv = job.cv;
+    const int n = std::max(job.samples, 1);
+    for (int64_t j = j0; j < j1; ++j) {
+        for (int64_t i = i0; i < i1; ++i) {
+            std::fill(sums.acc, sums.acc + sums.nch, 0.0);
+            sums.weight = 0.0;
+            double x0 = double(i) * cv.scale_x, y0 = double(j) * cv.scale_y;
+            double dx = cv.scale_x / n, dy = cv.scale_y / n;
+            for (int q = 0; q < n * n; ++q) {
+                double sx0 = x0 + dx * (q % n), sy0 = y0 + dy * (q / n);
+                double sx1 = q % n == n - 1 ? double(i + 1) * cv.scale_x : sx0 + dx;
+                double sy1 = q / n == n - 1 ? double(j + 1) * cv.scale_y : sy0 + dy;
+                slow_rect(sp, sx0, sy0, sx1, sy1, nullptr);
+            }
+            store_pixel(job.out, i, j, sums, pixel_coverage(cv, job.out, i, j));
+        }
+    }
+}
+
+// Sink of green.h for the direct path: texels read as they are (a lat-long's columns modulo its
+// width), weighted by a lat-long or tennisball row's exact solid angle (kRows) or the density
+// model; NCH channels (0: sums.nch).
+template <bool kRows, int NCH>
+struct DirectSink {
+    static constexpr bool kMomentX = !kRows;
+    const SourceModel& model;
+    int64_t cell, row0, period;
+    double sign;
+    PixelSums& sums;
+    double m = 0.0, g = 0.0;
+    // True when rows r0 ... r1 all hold a flat density model (no y moments needed).
+    bool flat(int64_t r0, int64_t r1) const {
+        if (!kRows) return false;
+        for (int64_t r = r0; r <= r1; ++r)
+            if (model.row_g[size_t(r - row0)] != 0.0) return false;
+        return true;
+    }
+    void row(int64_t iy) {
+        if (kRows) {
+            m = sign * model.row_m[size_t(iy - row0)];
+            g = sign * model.row_g[size_t(iy - row0)];
+        }
+    }
+    void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
+        double w;
+        if (kRows) {
+            w = m * area + g * dy;
+        } else {
+            TexelDensity t = model.texel(cell, ix, iy);
+            w = sign * (t.m * area + t.gx * dx + t.gy * dy);
+        }
+        if (period) {
+            while (ix < 0) ix += period;
+            while (ix >= period) ix -= period;
+        }
+        const int64_t nch = NCH ? NCH : sums.nch;
+        const float* v = model.image.data + (iy * model.image.width + ix) * nch;
+        for (int64_t c = 0; c < nch; ++c) sums.acc[c] += w * double(v[c]);
+        sums.weight += w;
+    }
+};
+
+template <bool kRows, int NCH>
+void direct_pixel(const SourceModel& model, int64_t cell, int64_t row0, int64_t period,
+                  const double* xs, const double* ys, PixelSums& sums, GreenScratch& green) {
+    double area = 0.5 * ((xs[0] - xs[2]) * (ys[1] - ys[3]) - (xs[1] - xs[3]) * (ys[0] - ys[2]));
+    DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums};
+    integrate_any(xs, ys, 4, sink, green);
+}
+
+using DirectPixel = void (*)(const SourceModel&, int64_t, int64_t, int64_t, const double*,
+                             const double*, PixelSums&, GreenScratch&);
+
+DirectPixel direct_pixel_for(bool rows, int64_t nch) {
+    if (rows) {
+        return nch == 3 ? direct_pixel<true, 3> : nch == 4 ? direct_pixel<true, 4> : direct_pixel<true, 0>;
+    }
+    return nch == 3 ? direct_pixel<false, 3> : nch == 4 ? direct_pixel<false, 4> : direct_pixel<false, 0>;
+}
+
+// True when the quad (xs, ys) of source cell `cell` can be integrated as it is: every texel it
+// touches is one the cell holds (a lat-long's columns wrap), no singular point is inside or on
+// it, and it does not wind around a lat-long pole.
+bool direct_quad(const Geometry& g, int64_t cell, const double* xs, const double* ys) {
+    double xmin = std::min({xs[0], xs[1], xs[2], xs[3]}), xmax = std::max({xs[0], xs[1], xs[2], xs[3]});
+    double ymin = std::min({ys[0], ys[1], ys[2], ys[3]}), ymax = std::max({ys[0], ys[1], ys[2], ys[3]});
+    const double margin = 1e-6;
+    double x0 = double((cell % g.columns) * g.cell_width() + g.guard);
+    double y0 = double((cell / g.columns) * g.cell_height() + g.guard);
+    double w = double(g.aspect * g.n), h = double(g.n);
+    if (!(ymin > y0 + margin && ymax < y0 + h - margin)) return false;
+    if (g.family == kLatlong && g.guard == 0) {
+        // The corners share one unwrapping, so the outline winds around a pole only where a
+        // side jumps by half a turn or more.
+        for (int k = 0; k < 4; ++k)
+            if (!(std::fabs(xs[(k + 1) % 4] - xs[k]) < 0.5 * w)) return false;
+        return true;
+    }
+    if (!(xmin > x0 + margin && xmax < x0 + w - margin)) return false;
+    if (!g.disk()) return true;
+    double r = 0.5 * h, cx = x0 + r, cy = y0 + r;
+    double turn = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        if (std::hypot(xs[k] - cx, ys[k] - cy) > r * (1.0 - 1e-6)) return false;
+        double d = std::atan2(ys[(k + 1) % 4] - cy, xs[(k + 1) % 4] - cx) - std::atan2(ys[k] - cy, xs[k] - cx);
+        turn += d - 2.0 * kPi * std::nearbyint(d / (2.0 * kPi));
+    }
+    return std::fabs(turn) < kPi;  // not around the centre (-Z lies all around the rim)
+}
+
+// Per-band scratch of the direct path.
+struct TileScratch {
+    std::vector<char> direct;  // per pixel of the tile: integrate directly
+    std::vector<SourcePoint> column;  // exact points of the last tile's right column
+    std::vector<Vec3> dirs;           // source direction of every corner of a tile
+    PrefixTable table;
+    EdgeMemo edges;
+};
+
+// Largest prefix table (texels) a tile builds; a tile whose direct pixels span more takes its
+// pixel rows one at a time, and a row that still does, its pixels one at a time.
+constexpr int64_t kMaxTableTexels = int64_t(1) << 16;
+
+// Integral of the grid's edge from corner a to corner b through the tile's table.
+template <int NCH, bool kGrad>
+void grid_edge(const AreaJob& job, const CornerGrid& g, const PrefixTable& t, int64_t row_base,
+               size_t a, size_t b, double* out) {
+    const int64_t nch = NCH ? NCH : t.nch;
+    for (int64_t c = 0; c <= nch; ++c) out[c] = 0.0;
+    edge_integral<NCH, kGrad>(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a], g.x[b],
+                              g.y[b], g.fx[b], g.fy[b], out);
+}
+
+// Integrate every edge of the direct pixels of rows [j0, j1) of the tile (independent loops,
+// so that the walks of neighbouring edges overlap), then each direct pixel's sums from its
+// four edges: the loop (i, j) -> (i + 1, j) -> (i + 1, j + 1) -> (i, j + 1), top and right
+// edges as walked, bottom and left against their direction.
+template <int NCH, bool kGrad>
+void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t row_base,
+                 int j0, int j1) {
+    EdgeMemo& e = ts.edges;
+    const int64_t st = e.stride, nch = st - 1;
+    const int w = g.w;
+    const size_t cs = size_t(w + 1);  // corners per grid row
+    const char* dir = ts.direct.data();
+    for (int j = j0; j <= j1; ++j) {
+        const char* above = j > j0 ? dir + (j - 1) * w : nullptr;
+        const char* below = j < j1 ? dir + j * w : nullptr;
+        for (int i = 0; i < w; ++i)
+            if ((above && above[i]) || (below && below[i]))
+                grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, j * cs + i + 1,
+                                      &e.hv[size_t(j * w + i) * st]);
+    }
+    for (int j = j0; j < j1; ++j) {
+        const char* row = dir + j * w;
+        for (int i = 0; i <= w; ++i)
+            if ((i > 0 && row[i - 1]) || (i < w && row[i]))
+                grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, (j + 1) * cs + i,
+                                      &e.vv[size_t(j * (w + 1) + i) * st]);
+    }
+    for (int j = j0; j < j1; ++j) {
+        const char* row = dir + j * w;
+        for (int i = 0; i < w; ++i) {
+            if (!row[i]) continue;
+            const double* tp = &e.hv[size_t(j * w + i) * st];
+            const double* bt = &e.hv[size_t((j + 1) * w + i) * st];
+            const double* lf = &e.vv[size_t(j * (w + 1) + i) * st];
+            const double* rt = lf + st;
+            double* sum = &e.pixel[size_t(j * w + i) * st];
+            for (int64_t c = 0; c <= (NCH ? NCH : nch); ++c) sum[c] = tp[c] + rt[c] - bt[c] - lf[c];
+        }
+    }
+}
+
+using EdgePixels = void (*)(const AreaJob&, const CornerGrid&, TileScratch&, int64_t, int, int);
+
+EdgePixels edge_pixels_for(bool grad, int64_t nch) {
+    if (grad) return nch == 3 ? edge_pixels<3, true> : nch == 4 ? edge_pixels<4, true> : edge_pixels<0, true>;
+    return nch == 3 ? edge_pixels<3, false> : nch == 4 ? edge_pixels<4, false> : edge_pixels<0, false>;
+}
+
+// Build the prefix table over the corners of the direct pixels of rows [j0, j1) of the tile;
+// false when there are none, the box is too large or holds a texel that is not finite.
+bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0, int j1,
+                bool& grad) {
+    const Geometry& s = job.cv.src;
+    // The box of every corner of rows [j0, j1]; where that is too large (a pixel far off, as
+    // near a pole), the box of the direct pixels' corners only.
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+    for (size_t k = g.at(0, j0); k <= g.at(g.w, j1); ++k) {
+        xmin = std::min(xmin, g.x[k]);
+        xmax = std::max(xmax, g.x[k]);
+        ymin = std::min(ymin, g.y[k]);
+        ymax = std::max(ymax, g.y[k]);
+    }
+    if ((xmax - xmin + 2.0) * (ymax - ymin + 2.0) > double(kMaxTableTexels) ||
+        ymin < double((g.ref_cell / s.columns) * s.cell_height() + s.guard) ||
+        ymax >= double((g.ref_cell / s.columns) * s.cell_height() + s.guard + s.n)) {
+        xmin = ymin = 1e300;
+        xmax = ymax = -1e300;
+        for (int j = j0; j < j1; ++j) {
+            for (int i = 0; i < g.w; ++i) {
+                if (!ts.direct[size_t(j * g.w + i)]) continue;
+                for (int q = 0; q < 4; ++q) {
+                    size_t k = g.at(i + (q & 1), j + (q >> 1));
+                    xmin = std::min(xmin, g.x[k]);
+                    xmax = std::max(xmax, g.x[k]);
+                    ymin = std::min(ymin, g.y[k]);
+                    ymax = std::max(ymax, g.y[k]);
+                }
+            }
+        }
+    }
+    if (xmin > xmax) return false;
+    int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax), r0 = floor_texel(ymin), r1 = floor_texel(ymax);
+    if ((c1 - c0 + 1) * (r1 - r0 + 1) > kMaxTableTexels) return false;
+    const int64_t row_base = (g.ref_cell / s.columns) * s.cell_height();
+    grad = false;
+    for (int64_t r = r0; r <= r1; ++r) grad = grad || job.model.row_g[size_t(r - row_base)] != 0.0;
+    int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
+    return ts.table.build(job.model.image, period, r0, r1, c0, c1);
+}
+
+// True when every pixel of a lat-long or tennisball grid passes direct_quad: all corners
+// between the first and last rows, the grid less than half a turn wide (no side can jump).
+bool whole_tile_direct(const Geometry& g, const CornerGrid& grid) {
+    if (g.family != kLatlong && g.family != kTennisball) return false;
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+    for (size_t k = 0; k < grid.x.size(); ++k) {
+        xmin = std::min(xmin, grid.x[k]);
+        xmax = std::max(xmax, grid.x[k]);
+        ymin = std::min(ymin, grid.y[k]);
+        ymax = std::max(ymax, grid.y[k]);
+    }
+    const int64_t cell = grid.ref_cell;
+    const double margin = 1e-6;
+    double x0 = double((cell % g.columns) * g.cell_width() + g.guard);
+    double y0 = double((cell / g.columns) * g.cell_height() + g.guard);
+    double w = double(g.aspect * g.n), h = double(g.n);
+    if (!(ymin > y0 + margin && ymax < y0 + h - margin)) return false;
+    if (g.family == kLatlong && g.guard == 0) return xmax - xmin < 0.5 * w;
+    return xmin > x0 + margin && xmax < x0 + w - margin;
+}
+
+// True when an edge of the tile might be one that edge_near refines (area_map.h): the tile
+// reaches within twice kNearLengths pixels of a singular direction, or crosses a fold.
+bool tile_maybe_near(const AreaJob& job, const CornerGrid& g, int64_t cell) {
+    const Conversion& cv = job.cv;
+    const size_t corners[4] = {g.at(0, 0), g.at(g.w, 0), g.at(g.w, g.h), g.at(0, g.h)};
+    Vec3 d[4], c{0.0, 0.0, 0.0};
+    for (int k = 0; k < 4; ++k) {
+        d[k] = source_direction(cv.src, g.exact[corners[k]]);
+        c = {c.x + d[k].x, c.y + d[k].y, c.z + d[k].z};
+    }
+    c = normalized(c.x, c.y, c.z);
+    auto dist = [](const Vec3& a, const Vec3& b) {
+        return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+    };
+    double radius = 0.0;
+    for (int k = 0; k < 4; ++k) radius = std::max(radius, dist(d[k], c));
+    double pixel = std::min(dist(d[1], d[0]) / g.w, dist(d[3], d[0]) / g.h);
+    for (int k = 0; k < job.sing.near_count; ++k)
+        if (dist(job.sing.near[k], c) <= radius + 2.0 * kNearLengths * pixel) return true;
+    double x0 = double(g.i0) * cv.scale_x, y0 = double(g.j0) * cv.scale_y;
+    double x1 = double(g.i0 + g.w) * cv.scale_x, y1 = double(g.j0 + g.h) * cv.scale_y;
+    if (!output_smooth(cv.dst, cell, x0, y0, x1, y1)) return true;
+    return cv.src.family == kOctahedral || cv.src.family == kEqualArea;  // folds: test pixels
+}
+
+// True when an edge of pixel (i, j) of the grid is one edge_near refines (dirs: the source
+// direction of every corner of the grid).
+bool pixel_near(const AreaJob& job, const CornerGrid& g, const std::vector<Vec3>& dirs,
+                int64_t cell, int i, int j) {
+    const Conversion& cv = job.cv;
+    const size_t k[4] = {g.at(i, j), g.at(i + 1, j), g.at(i + 1, j + 1), g.at(i, j + 1)};
+    const double ox[4] = {double(g.i0 + i), double(g.i0 + i + 1), double(g.i0 + i + 1), double(g.i0 + i)};
+    const double oy[4] = {double(g.j0 + j), double(g.j0 + j), double(g.j0 + j + 1), double(g.j0 + j + 1)};
+    for (int q = 0; q < 4; ++q) {
+        int r = (q + 1) % 4;
+        if (edge_near(cv, job.sing, cell, ox[q] * cv.scale_x, oy[q] * cv.scale_y, ox[r] * cv.scale_x,
+                      oy[r] * cv.scale_y, dirs[k[q]], dirs[k[r]], g.exact[k[q]], g.exact[k[r]]))
+            return true;
+    }
+    return false;
+}
+
+// The pixels of one tile inside output cell `cell` (grid: its corners): direct where the
+// corner grid allows (through edge integrals for lat-long and tennisball sources, else pixel
+// by pixel), the general path with the grid's corners elsewhere.
+void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& grid,
+                 TileScratch& ts, int64_t cell, bool regular) {
+    const Conversion& cv = job.cv;
+    const Geometry& s = cv.src;
+    const bool straight = regular && grid.usable;
+    const bool maybe_near = straight && tile_maybe_near(job, grid, cell);
+    const int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
+    const int64_t row0 = (grid.ref_cell / s.columns) * s.cell_height();
+    const bool rows = !job.model.row_m.empty();
+    const DirectPixel direct = direct_pixel_for(rows, sums.nch);
+    ts.direct.assign(size_t(grid.w * grid.h), 0);
+    const int64_t st = grid.w + 1;
+    if (straight && !maybe_near && whole_tile_direct(s, grid)) {
+        std::fill(ts.direct.begin(), ts.direct.end(), 1);
+    }
+    for (int j = 0; j < grid.h && straight && !ts.direct[0]; ++j) {
+        const double* x = grid.x.data() + j * st;
+        const double* y = grid.y.data() + j * st;
+        char* direct_row = ts.direct.data() + j * grid.w;
+        for (int i = 0; i < grid.w; ++i) {
+            const double xs[4] = {x[i], x[i + 1], x[i + 1 + st], x[i + st]};
+            const double ys[4] = {y[i], y[i + 1], y[i + 1 + st], y[i + st]};
+            direct_row[i] = direct_quad(s, grid.ref_cell, xs, ys);
+        }
+    }
+    if (maybe_near) {
+        ts.dirs.resize(grid.exact.size());
+        for (size_t k = 0; k < grid.exact.size(); ++k) ts.dirs[k] = source_direction(s, grid.exact[k]);
+        for (int j = 0; j < grid.h; ++j)
+            for (int i = 0; i < grid.w; ++i)
+                if (ts.direct[size_t(j * grid.w + i)] && pixel_near(job, grid, ts.dirs, cell, i, j))
+                    ts.direct[size_t(j * grid.w + i)] = 0;
+    }
+    // Rows of pixels share one table where it fits, else each pixel row has its own.
+    int band_j0 = 0;
+    while (band_j0 < grid.h) {
+        bool grad = false, whole = rows && tile_table(job, grid, ts, band_j0, grid.h, grad);
+        int band_j1 = grid.h;
+        if (!whole && rows) {
+            band_j1 = band_j0 + 1;
+            whole = tile_table(job, grid, ts, band_j0, band_j1, grad);
+        } else if (!rows) {
+            band_j1 = grid.h;
+        }
+        if (whole) {
+            ts.edges.reset(grid.w, grid.h, sums.nch);
+            edge_pixels_for(grad, sums.nch)(job, grid, ts, row0, band_j0, band_j1);
+        }
+        for (int j = band_j0; j < band_j1; ++j) {
+            for (int i = 0; i < grid.w; ++i) {
+                const size_t k[4] = {grid.at(i, j), grid.at(i + 1, j), grid.at(i + 1, j + 1), grid.at(i, j + 1)};
+                int64_t pi = grid.i0 + i, pj = grid.j0 + j;
+                if (ts.direct[size_t(j * grid.w + i)]) {
+                    if (whole) {
+                        // The loop's sums, signed as the footprint runs (the ratio is not).
+                        const double* e = &ts.edges.pixel[size_t(j * grid.w + i) * ts.edges.stride];
+                        store_sums(job.out, pi, pj, e[0], e + 1, pixel_coverage(cv, job.out, pi, pj));
+                        continue;
+                    } else {
+                        std::fill(sums.acc, sums.acc + sums.nch, 0.0);
+                        sums.weight = 0.0;
+                        double xs[4], ys[4];
+                        for (int q = 0; q < 4; ++q) {
+                            xs[q] = grid.x[k[q]];
+                            ys[q] = grid.y[k[q]];
+                        }
+                        direct(job.model, grid.ref_cell, row0, period, xs, ys, sums, sp.green);
+                    }
+                } else {
+                    std::fill(sums.acc, sums.acc + sums.nch, 0.0);
+                    sums.weight = 0.0;
+                    SourcePoint corners[4] = {grid.exact[k[0]], grid.exact[k[1]], grid.exact[k[2]], grid.exact[k[3]]};
+                    slow_rect(sp, double(pi) * cv.scale_x, double(pj) * cv.scale_y,
+                              double(pi + 1) * cv.scale_x, double(pj + 1) * cv.scale_y, corners);
+                }
+                store_pixel(job.out, pi, pj, sums, pixel_coverage(cv, job.out, pi, pj));
+            }
+        }
+        band_j0 = band_j1;
+    }
+}
+
+// The output cell that holds the whole level-0 rectangle, or -1.
+int64_t rect_cell(const Geometry& d, double x0, double y0, double x1, double y1) {
+    Located a = locate(d, x0, y0), b = locate(d, std::nextafter(x1, x0), std::nextafter(y1, y0));
+    return a.cell == b.cell ? a.cell : -1;
+}
+
+// True when the rectangle lies in its disk cell's valid disk (every pixel wholly valid).
+bool inside_disk(const Geometry& d, int64_t cell, double x0, double y0, double x1, double y1) {
+    double cx, cy, unit;
+    cell_disk(d, cell, cx, cy, unit);
+    double fx = std::max(std::fabs(x0 - cx), std::fabs(x1 - cx));
+    double fy = std::max(std::fabs(y0 - cy), std::fabs(y1 - cy));
+    return fx * fx + fy * fy <= unit * unit;
+}
+
+// One band of kTile output rows: tiles of up to kTile x kTile pixels, cut at output cell
+// edges; tiles in one cell go through tile_pixels, pixels across cell edges one by one.
+void area_band(const AreaJob& job, int64_t band, SlowPath& sp, PixelSums& sums, CornerGrid& grid,
+               TileScratch& ts) {
+    const Conversion& cv = job.cv;
+    const Geometry& d = cv.dst;
+    const ResampleOutput& out = job.out;
+    int64_t j0 = band * kTile, j1 = std::min(j0 + kTile, out.height);
+    // The right column of the last tile mapped, for the next tile of the same cell.
+    std::vector<SourcePoint>& shared = ts.column;
+    int64_t shared_cell = -1, shared_i = -1;
+    for (int64_t i0 = 0; i0 < out.width; i0 += kAreaTileWidth) {
+        int64_t i1 = std::min(i0 + kAreaTileWidth, out.width);
+        double x0 = double(i0) * cv.scale_x, y0 = double(j0) * cv.scale_y;
+        double x1 = double(i1) * cv.scale_x, y1 = double(j1) * cv.scale_y;
+        if (!cv.fill && out.zeroed && tile_in_empty_cell(d, x0, y0, x1, y1)) continue;
+        bool direct = job.samples <= 1 && direct_allowed.load(std::memory_order_relaxed);
+        int64_t cell = direct ? rect_cell(d, x0, y0, x1, y1) : -1;
+        if (cell < 0 || d.cell_face[cell] < 0) {
+            slow_block(job, sp, sums, i0, j0, i1, j1);
+            continue;
+        }
+        bool regular = !d.disk() || inside_disk(d, cell, x0, y0, x1, y1);
+        if (d.disk() && !regular) {
+            slow_block(job, sp, sums, i0, j0, i1, j1);
+            continue;
+        }
+        const bool after = shared_cell == cell && shared_i == i0;
+        map_grid(cv, cell, i0, j0, int(i1 - i0), int(j1 - j0), grid, after ? shared.data() : nullptr);
+        shared.resize(size_t(j1 - j0 + 1));
+        for (int j = 0; j <= grid.h; ++j) shared[size_t(j)] = grid.exact[grid.at(grid.w, j)];
+        shared_cell = cell;
+        shared_i = i1;
+        tile_pixels(job, sp, sums, grid, ts, cell, regular);
+    }
+}
+
+}  // namespace
+
+bool set_area_direct(bool allowed) { return direct_allowed.exchange(allowed); }
+
+void resample_area(const Image& src, const Conversion& cv, int samples, const ResampleOutput& out,
+                   int threads, int64_t* progress) {
+    SourceModel model(src, cv.src);
+    Singular sing = source_singular(cv);
+    AreaJob job{cv, model, sing, out, samples};
+    int64_t bands = (out.height + kTile - 1) / kTile;
+    parallel_for(bands, threads, [&](int64_t band) {
+        SlowPath sp(cv, model, sing);
+        std::vector<double> acc(size_t(out.channels));
+        PixelSums sums{acc.data(), out.channels, 0.0};
+        sp.sums = &sums;
+        CornerGrid grid;
+        TileScratch ts;
+        area_band(job, band, sp, sums, grid, ts);
+        if (progress) __atomic_add_fetch(progress, 1, __ATOMIC_RELAXED);
+    });
+}
+
+}  // namespace envconv

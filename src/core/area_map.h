@@ -1,0 +1,168 @@
+// Mapping the area filter's output points into the source, and the source's singular points.
+//
+// Singular points are the source directions where a source layout's map is not one to one:
+// a lat-long's poles (the top and bottom rows' outer edges) and the -Z of a mirror ball or an
+// angular map (their rim circle). A footprint that holds one is not a plain polygon: near a
+// pole it runs along the pole's row edge, near -Z along the rim. The area filter finds where
+// each singular direction lands in an output cell and closes the footprints around it
+// (area_slow.h).
+#pragma once
+
+#include <cmath>
+
+#include "area_pieces.h"
+#include "footprint.h"
+
+namespace envconv {
+
+// The source directions where the source map is singular, and every direction near which
+// pixel edges need refining (area_slow.h): those and the output map's own singular directions.
+struct Singular {
+    int count = 0;
+    int kind = 0;  // 1: lat-long poles (+Y, -Y); 2: a disk's -Z (sphere, angular)
+    Vec3 src[2];   // in the source frame
+    Vec3 out[2];   // in the output frame: rot^T src
+    int near_count = 0;
+    Vec3 near[16];  // in the source frame
+};
+
+inline Singular source_singular(const Conversion& cv) {
+    Singular s;
+    const Rotation& r = cv.rot;
+    auto back = [&r](const Vec3& d) {  // rot^T d
+        return Vec3{r.m[0] * d.x + r.m[3] * d.y + r.m[6] * d.z,
+                    r.m[1] * d.x + r.m[4] * d.y + r.m[7] * d.z,
+                    r.m[2] * d.x + r.m[5] * d.y + r.m[8] * d.z};
+    };
+    if (cv.src.family == kLatlong) {
+        s.kind = 1;
+        s.count = 2;
+        s.src[0] = {0.0, 1.0, 0.0};
+        s.src[1] = {0.0, -1.0, 0.0};
+    } else if (cv.src.family == kSphere || cv.src.family == kAngular) {
+        s.kind = 2;
+        s.count = 1;
+        s.src[0] = {0.0, 0.0, -1.0};
+    }
+    for (int k = 0; k < s.count; ++k) {
+        s.out[k] = back(s.src[k]);
+        s.near[s.near_count++] = s.src[k];
+    }
+    // The output's own: a lat-long's poles, the -Z of a mirror ball or angular map.
+    if (cv.dst.family == kLatlong) {
+        s.near[s.near_count++] = r.apply({0.0, 1.0, 0.0});
+        s.near[s.near_count++] = r.apply({0.0, -1.0, 0.0});
+    } else if (cv.dst.family == kSphere || cv.dst.family == kAngular) {
+        s.near[s.near_count++] = r.apply({0.0, 0.0, -1.0});
+    }
+    // Where the folds of an octahedral or equal-area square meet (the octahedron's vertices:
+    // the axes of its frame), its map is kinked in every direction, as at a cone's tip.
+    const Vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    if (cv.dst.family == kOctahedral || cv.dst.family == kEqualArea)
+        for (const Vec3& a : axes) s.near[s.near_count++] = r.apply(a);
+    if (cv.src.family == kOctahedral || cv.src.family == kEqualArea)
+        for (const Vec3& a : axes)
+            if (s.near_count < 16) s.near[s.near_count++] = a;
+    return s;
+}
+
+// Pixel edges within this many times their own length of a singular direction are refined:
+// there the images of a pixel's opposite edges bend differently (near a pole, by 1/(8 r) of a
+// pixel at r pixels), and chords would misplace that difference of the pixel's solid angle.
+constexpr double kNearLengths = 16.0;
+
+// True when the line (a0, b0) -> (a1, b1) crosses or touches a fold of the octahedral and
+// equal-area squares (their axes, their edges, the diamond |a| + |b| = 1), where their maps
+// have a kink. Touching counts: a pixel that a fold cuts through two of its corners has two
+// edges on each side, whose images bend in mirrored ways, so their chords' errors add up.
+inline bool crosses_fold(double a0, double b0, double a1, double b1) {
+    for (double line : {-1.0, 0.0, 1.0})
+        if ((a0 - line) * (a1 - line) <= 0.0 || (b0 - line) * (b1 - line) <= 0.0) return true;
+    return (std::fabs(a0) + std::fabs(b0) - 1.0) * (std::fabs(a1) + std::fabs(b1) - 1.0) <= 0.0;
+}
+
+// True when a pixel edge needs refining beyond its chord: near a singular direction, or across
+// a fold of the output map (output points (ox0, oy0), (ox1, oy1) of cell `cell`) or of the
+// source map (source points s0, s1 in their own cells); directions d0, d1 in the source
+// frame. Depends on the edge alone, so both pixels that share it agree.
+inline bool edge_near(const Conversion& cv, const Singular& s, int64_t cell, double ox0,
+                      double oy0, double ox1, double oy1, const Vec3& d0, const Vec3& d1,
+                      const SourcePoint& s0, const SourcePoint& s1) {
+    double len = std::sqrt((d1.x - d0.x) * (d1.x - d0.x) + (d1.y - d0.y) * (d1.y - d0.y) +
+                           (d1.z - d0.z) * (d1.z - d0.z));
+    for (int k = 0; k < s.near_count; ++k) {
+        const Vec3& n = s.near[k];
+        double e0 = std::sqrt((d0.x - n.x) * (d0.x - n.x) + (d0.y - n.y) * (d0.y - n.y) + (d0.z - n.z) * (d0.z - n.z));
+        double e1 = std::sqrt((d1.x - n.x) * (d1.x - n.x) + (d1.y - n.y) * (d1.y - n.y) + (d1.z - n.z) * (d1.z - n.z));
+        if (std::min(e0, e1) <= kNearLengths * len) return true;
+    }
+    const Geometry &d = cv.dst, &g = cv.src;
+    if (d.family == kOctahedral || d.family == kEqualArea) {
+        double a0, b0, a1, b1;
+        cell_local(d, cell, ox0, oy0, a0, b0);
+        cell_local(d, cell, ox1, oy1, a1, b1);
+        if (crosses_fold(a0, b0, a1, b1)) return true;
+    }
+    if (g.family == kOctahedral || g.family == kEqualArea) {
+        double a0, b0, a1, b1;
+        cell_local(g, s0.cell, s0.x, s0.y, a0, b0);
+        cell_local(g, s1.cell, s1.x, s1.y, a1, b1);
+        // Folded into the square, points across one of its edges land far apart.
+        if (crosses_fold(a0, b0, a1, b1) || std::fabs(a1 - a0) + std::fabs(b1 - b0) > 1.0) return true;
+    }
+    return false;
+}
+
+// Angular distance of a unit direction from singular direction k (cheap, small angles).
+inline double singular_distance(const Singular& s, int k, const Vec3& d) {
+    double dx = d.x - s.src[k].x, dy = d.y - s.src[k].y, dz = d.z - s.src[k].z;
+    return std::sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+// Within this angle (rad) of a singular direction a point counts as on it.
+constexpr double kSingularAngle = 1e-9;
+
+// Index of the singular direction d lies on, or -1.
+inline int on_singular(const Singular& s, const Vec3& d) {
+    for (int k = 0; k < s.count; ++k)
+        if (singular_distance(s, k, d) <= kSingularAngle) return k;
+    return -1;
+}
+
+// Source-frame direction of output point (x, y) through output cell `cell`'s (continued) map.
+inline Vec3 output_direction(const Conversion& cv, int64_t cell, double x, double y) {
+    double a, b;
+    cell_local(cv.dst, cell, x, y, a, b);
+    return cv.rot.apply(face_to_dir(cv.dst.family, cv.dst.cell_face[cell], a, b));
+}
+
+// The source point of direction d in the cell that holds it (its own cell's coordinates).
+inline SourcePoint source_of(const Geometry& src, const Vec3& d) {
+    FacePoint f = dir_to_face(src.family, d.x, d.y, d.z);
+    ImagePoint p = face_to_image(src, f.face, f.a, f.b);
+    return {p.x, p.y, p.cell};
+}
+
+// Direction of source point p (its cell's continued map).
+inline Vec3 source_direction(const Geometry& src, const SourcePoint& p) {
+    double a, b;
+    cell_local(src, p.cell, p.x, p.y, a, b);
+    return face_to_dir(src.family, src.cell_face[p.cell], a, b);
+}
+
+// Where the singular source point of singular direction k lies in `cell`'s coordinates, seen
+// from (ref_x, ref_y): for a lat-long pole the point of its row edge below ref_x... the caller
+// replaces the x; for -Z, the rim point in the direction of (ref_x, ref_y).
+inline SourcePoint singular_image(const Geometry& src, const Singular& s, int64_t cell, int k,
+                                  double ref_x, double ref_y) {
+    if (s.kind == 1) {
+        double top = double((cell / src.columns) * src.cell_height() + src.guard);
+        return {ref_x, k == 0 ? top : top + double(src.n), cell};
+    }
+    double cx, cy, unit;
+    cell_disk(src, cell, cx, cy, unit);
+    double ang = std::atan2(ref_y - cy, ref_x - cx);
+    return {cx + unit * std::cos(ang), cy + unit * std::sin(ang), cell};
+}
+
+}  // namespace envconv

@@ -1,0 +1,158 @@
+// The area filter's direct path for lat-long and tennisball sources: footprints integrated
+// through their edges, each edge once for the two pixels that share it.
+//
+// By Green's theorem, the colour a footprint P holds, sum over texels t of s_t times the solid
+// angle of P n t, is the closed integral over P's boundary of Q dy, with
+// Q(x, y) = rho(y) S_r(x): rho the row's density model (area_source.h) and S_r(x) the running
+// sum of row r's values from the tile's first column to x (a prefix sum plus the part of the
+// texel under x). Its solid angle is the same with S_r(x) = x - c0. The integral along an edge
+// walks the texels it crosses (green.h's grid traversal) and needs nothing else, so a pixel's
+// colour is the sum of its four edges' integrals, and a pixel 16 texels wide costs its
+// perimeter, not its area. The prefix sums are made per tile over its source box.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "area_source.h"
+#include "green.h"
+
+namespace envconv {
+
+// Running sums of a box of source rows: p[(r * (cols + 1) + c) * nch + ch] is the sum of
+// texels c0 ... c0 + c - 1 of row r0 + r (columns modulo `period` when it is not 0).
+struct PrefixTable {
+    int64_t r0 = 0, c0 = 0, rows = 0, cols = 0, nch = 0;
+    std::vector<double> p;
+
+    // Fill the table for rows [r0, r1] and columns [c0, c1]; false when a texel is not finite
+    // (inf and NaN stay in the pixels that cover them: the per-texel path then). A row's last
+    // sums are finite only if all its texels are (or it overflowed: the other path too).
+    bool build(const Image& src, int64_t period, int64_t r0_, int64_t r1, int64_t c0_, int64_t c1) {
+        r0 = r0_;
+        c0 = c0_;
+        rows = r1 - r0 + 1;
+        cols = c1 - c0 + 1;
+        nch = src.channels;
+        size_t need = size_t(rows * (cols + 1) * nch);
+        if (p.size() < need) p.resize(need);  // grows to the largest table only: no refills
+        int64_t start = period ? ((c0 % period) + period) % period : c0;
+        for (int64_t r = 0; r < rows; ++r) {
+            double* row = p.data() + r * (cols + 1) * nch;
+            for (int64_t ch = 0; ch < nch; ++ch) row[ch] = 0.0;
+            // At most two runs of source columns: up to the wrap, then from column 0.
+            int64_t done = 0, x = start;
+            while (done < cols) {
+                int64_t run = period ? std::min(cols - done, period - x) : cols - done;
+                const float* v = src.texel(r0 + r, x);
+                double* out = row + (done + 1) * nch;
+                if (nch == 3) {  // running sums in registers, not through the stored row
+                    double a = out[-3], b = out[-2], c = out[-1];
+                    for (int64_t k = 0; k < run; ++k, v += 3, out += 3) {
+                        out[0] = a += double(v[0]);
+                        out[1] = b += double(v[1]);
+                        out[2] = c += double(v[2]);
+                    }
+                } else {
+                    for (int64_t k = 0; k < run * nch; ++k) out[k] = out[k - nch] + double(v[k]);
+                }
+                done += run;
+                x = 0;
+            }
+            for (int64_t ch = 0; ch < nch; ++ch)
+                if (!std::isfinite(row[cols * nch + ch])) return false;
+        }
+        return true;
+    }
+};
+
+// Add the integral of Q dy along the edge (x0, y0) -> (x1, y1) (in texels (ix0, iy0) and
+// (ix1, iy1)) to out[0] (solid angle) and out[1 ...] (colour): the density of row r is
+// m_r + g_r (y - r - 1/2), from model.row_m, row_g (rows relative to row_base). The edge lies
+// inside the table. The walk keeps the texel's place in the table and its row's density as it
+// steps, so that a piece costs a few multiplications per channel.
+template <int NCH, bool kGrad>
+void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_base, double x0,
+                   double y0, int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1,
+                   int64_t iy1, double* out) {
+    const double dx = x1 - x0, dy = y1 - y0;
+    if (dy == 0.0) return;
+    const int64_t nch = NCH ? NCH : t.nch, row_stride = (t.cols + 1) * nch;
+    int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
+    const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
+    double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);
+    double tx = steps_x ? (line_x - x0) / dx : 2.0, ty = steps_y ? (line_y - y0) / dy : 2.0;
+    const double step_tx = steps_x ? double(sx) / dx : 0.0, step_ty = double(sy) / dy;
+    const double* pr = t.p.data() + ((iy0 - t.r0) * (t.cols + 1) + (ix0 - t.c0)) * nch;
+    const double* row_m = model.row_m.data() - row_base;
+    const double* row_g = model.row_g.data() - row_base;
+    int64_t r = iy0;
+    double m = row_m[r], g = kGrad ? row_g[r] : 0.0, mid = double(r) + 0.5;
+    double base_x = double(ix0), col = double(ix0 - t.c0);
+    double local[1 + (NCH ? NCH : 8)] = {};
+    double* sum = NCH || nch <= 8 ? local : out;
+    auto piece = [&](double px, double py, double qx, double qy) {
+        double ey = qy - py, up = px - base_x, uq = qx - base_x, ubar = 0.5 * (up + uq);
+        if (!kGrad) {
+            double em = ey * m;
+            sum[0] += em * (col + ubar);
+            for (int64_t ch = 0; ch < nch; ++ch) sum[1 + ch] += em * (pr[ch] + (pr[nch + ch] - pr[ch]) * ubar);
+            return;
+        }
+        double vp = py - mid, vq = qy - mid, vbar = 0.5 * (vp + vq);
+        double uv = (up * (2.0 * vp + vq) + uq * (vp + 2.0 * vq)) * (1.0 / 6.0);
+        sum[0] += ey * (m * (col + ubar) + g * (col * vbar + uv));
+        for (int64_t ch = 0; ch < nch; ++ch) {
+            double b = pr[ch], s = pr[nch + ch] - b;
+            sum[1 + ch] += ey * (m * (b + s * ubar) + g * (b * vbar + s * uv));
+        }
+    };
+    // Which line comes next is as good as random: the steps are selects, not branches.
+    double px = x0, py = y0;
+    const int64_t step_cx = sx * nch, step_cy = sy * row_stride;
+    for (int left = steps_x + steps_y; left > 0; --left) {
+        const bool across_x = tx < ty;
+        const double qx = across_x ? line_x : x0 + ty * dx;
+        const double qy = across_x ? y0 + tx * dy : line_y;
+        piece(px, py, qx, qy);
+        px = qx;
+        py = qy;
+        pr += across_x ? step_cx : step_cy;
+        const double shift_x = across_x ? double(sx) : 0.0, shift_y = across_x ? 0.0 : double(sy);
+        base_x += shift_x;
+        col += shift_x;
+        line_x += shift_x;
+        r += across_x ? 0 : sy;
+        mid += shift_y;
+        line_y += shift_y;
+        m = row_m[r];
+        if (kGrad) g = row_g[r];
+        steps_x -= across_x;
+        steps_y -= !across_x;
+        tx = across_x ? (steps_x ? tx + step_tx : 2.0) : tx;
+        ty = across_x ? ty : (steps_y ? ty + step_ty : 2.0);
+    }
+    piece(px, py, x1, y1);
+    if (sum != out) {
+        for (int64_t c = 0; c <= nch; ++c) out[c] += sum[c];
+    }
+}
+
+// Edge integrals of a tile, each computed once: horizontal edge (i, j) runs from corner (i, j)
+// to (i + 1, j), vertical edge (i, j) from (i, j) to (i, j + 1); and each pixel's sums.
+struct EdgeMemo {
+    int w = 0, h = 0;
+    int64_t stride = 0;  // doubles per edge: 1 + channels (solid angle, colour)
+    std::vector<double> hv, vv, pixel;
+    void reset(int w_, int h_, int64_t nch) {
+        w = w_;
+        h = h_;
+        stride = 1 + nch;
+        hv.resize(size_t((h + 1) * w * stride));
+        vv.resize(size_t(h * (w + 1) * stride));
+        pixel.resize(size_t(h * w * stride));
+    }
+};
+
+}  // namespace envconv

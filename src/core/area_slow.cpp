@@ -1,0 +1,560 @@
+// The area filter's general path (see area_slow.h for what it does and why).
+#include "area_slow.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace envconv {
+namespace {
+
+// Centroid of a piece's vertices.
+void piece_centre(const Piece& p, double& x, double& y) {
+    x = y = 0.0;
+    for (int k = 0; k < p.n; ++k) {
+        x += p.v[k].x;
+        y += p.v[k].y;
+    }
+    x /= p.n;
+    y /= p.n;
+}
+
+// Distance from (x, y) to edge k and the parameter of the nearest point on it.
+double edge_distance(const Piece& p, int k, double x, double y, double& t) {
+    const PieceVertex &s = p.v[k], &e = p.v[k + 1 == p.n ? 0 : k + 1];
+    if (!s.arc) {
+        double dx = e.x - s.x, dy = e.y - s.y, len2 = dx * dx + dy * dy;
+        t = len2 > 0.0 ? std::min(1.0, std::max(0.0, ((x - s.x) * dx + (y - s.y) * dy) / len2)) : 0.0;
+        return std::hypot(s.x + t * dx - x, s.y + t * dy - y);
+    }
+    double a0 = std::atan2(s.y - p.cy, s.x - p.cx), a1 = std::atan2(e.y - p.cy, e.x - p.cx);
+    if (a1 <= a0) a1 += 2.0 * kPi;
+    double a = std::atan2(y - p.cy, x - p.cx);
+    while (a < a0) a += 2.0 * kPi;
+    if (a <= a1) {
+        t = (a - a0) / (a1 - a0);
+        return std::fabs(std::hypot(x - p.cx, y - p.cy) - p.r);
+    }
+    double ds = std::hypot(x - s.x, y - s.y), de = std::hypot(x - e.x, y - e.y);
+    t = ds < de ? 0.0 : 1.0;
+    return std::min(ds, de);
+}
+
+// True when (x, y) lies inside the convex piece.
+bool inside_piece(const Piece& p, double x, double y) {
+    for (int k = 0; k < p.n; ++k) {
+        const PieceVertex &s = p.v[k], &e = p.v[k + 1 == p.n ? 0 : k + 1];
+        if (s.arc) {
+            if (std::hypot(x - p.cx, y - p.cy) > p.r) return false;
+        } else if ((e.x - s.x) * (y - s.y) - (e.y - s.y) * (x - s.x) < 0.0) {
+            return false;
+        }
+    }
+    return true;
+}
+
+// Put each source singular point that lands in the piece on it: onto the vertex or edge it
+// lies on (within kSnap), else mark it for closure.
+void place_singular(const SlowPath& sp, Piece& p, bool closure[2]) {
+    const double snap = kSnap * std::max({1.0, sp.cv.scale_x, sp.cv.scale_y});
+    for (int s = 0; s < sp.sing.count; ++s) {
+        double cx, cy, x, y;
+        piece_centre(p, cx, cy);
+        if (!continued_point(sp.cv.dst, p.cell, sp.sing.out[s], cx, cy, x, y)) continue;
+        int best = -1;
+        double best_d = 1e300, best_t = 0.0;
+        for (int k = 0; k < p.n; ++k) {
+            double t, dist = edge_distance(p, k, x, y, t);
+            if (dist < best_d) {
+                best_d = dist;
+                best = k;
+                best_t = t;
+            }
+        }
+        if (best < 0) continue;
+        if (best_d > snap) {
+            if (inside_piece(p, x, y)) closure[s] = true;
+            continue;
+        }
+        int next = best + 1 == p.n ? 0 : best + 1;
+        double px, py;
+        edge_point(p, best, best_t, px, py);
+        if (std::hypot(px - p.v[best].x, py - p.v[best].y) <= snap) {
+            p.v[best].snapped = s;
+        } else if (std::hypot(px - p.v[next].x, py - p.v[next].y) <= snap) {
+            p.v[next].snapped = s;
+        } else if (p.n < kPieceVertices) {
+            PieceVertex v = p.v[best];
+            v.x = px;
+            v.y = py;
+            v.mapped = false;
+            v.snapped = s;
+            v.boundary = false;
+            for (int k = p.n; k > best + 1; --k) p.v[k] = p.v[k - 1];
+            p.v[best + 1] = v;
+            ++p.n;
+        }
+    }
+}
+
+// Append the refinement points of edge k between parameters t0 and t1 (source points
+// (x0, y0), (x1, y1) in `cell`): its midpoint's image where it strays from the chord by more
+// than kChordTol + 2 kCornerTol output pixels across the edge, recursively. False when the edge
+// leaves the cell in between.
+bool refine_edge(SlowPath& sp, const Piece& p, int k, int64_t cell, double t0, double x0,
+                 double y0, double t1, double x1, double y1, int depth) {
+    if (depth >= kMaxRefine) return true;
+    double tm = 0.5 * (t0 + t1), ox, oy;
+    edge_point(p, k, tm, ox, oy);
+    Vec3 d = output_direction(sp.cv, p.cell, ox, oy);
+    if (on_singular(sp.sing, d) >= 0) return true;
+    if (source_of(sp.cv.src, d).cell != cell) return false;
+    double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1), mx, my;
+    if (!continued_point(sp.cv.src, cell, d, cx, cy, mx, my)) return false;
+    // The midpoint's offset across the chord, in output pixels: |c x (M - C)| / |c x J n|
+    // with c the chord and J n the image of a unit step across the edge (output pixels) at
+    // its midpoint; the step's component along the chord does not move the outline.
+    const double h = 1e-3;
+    double ex, ey;
+    edge_point(p, k, std::min(1.0, tm + 1e-3), ex, ey);
+    double tx = ex - ox, ty = ey - oy, len = std::hypot(tx, ty);
+    double nx = len > 0.0 ? -ty / len : 0.0, ny = len > 0.0 ? tx / len : 1.0;
+    double qx, qy;
+    Vec3 dq = output_direction(sp.cv, p.cell, ox + h * nx, oy + h * ny);
+    if (!continued_point(sp.cv.src, cell, dq, mx, my, qx, qy)) return false;
+    double chx = x1 - x0, chy = y1 - y0;
+    double off = std::fabs(chx * (my - cy) - chy * (mx - cx));
+    double scale = std::fabs(chx * (qy - my) - chy * (qx - mx)) / h;
+    // Straight: within the tolerance, and not a loop or a bulge (a chord of no length, or a
+    // midpoint further off than a quarter of the chord: both ends at -Z, say).
+    double chord2 = chx * chx + chy * chy;
+    bool near = chord2 > 0.0 ? off <= 0.25 * chord2 : (mx == cx && my == cy);
+    if (near && off <= kChordTol * scale) return true;
+    if (!refine_edge(sp, p, k, cell, t0, x0, y0, tm, mx, my, depth + 1)) return false;
+    sp.xs.push_back(mx);
+    sp.ys.push_back(my);
+    return refine_edge(sp, p, k, cell, tm, mx, my, t1, x1, y1, depth + 1);
+}
+
+// The source point where edge k leaves (at_end false) or reaches (at_end true) singular point
+// s: the limit of its points' positions along the pole's row edge, or around the rim,
+// extrapolated from two points near the end.
+bool singular_limit(const SlowPath& sp, const Piece& p, int k, bool at_end, int64_t cell, int s,
+                    double ref_x, double ref_y, double& x, double& y) {
+    double tau = 1e-3;
+    for (int it = 0; it < 4; ++it) {
+        double ox, oy;
+        edge_point(p, k, at_end ? 1.0 - tau : tau, ox, oy);
+        double dist = singular_distance(sp.sing, s, output_direction(sp.cv, p.cell, ox, oy));
+        if (dist > 0.0) tau = std::min(0.25, std::max(1e-12, tau * 1e-5 / dist));
+    }
+    double px[2], py[2];
+    for (int m = 0; m < 2; ++m) {
+        double t = m == 0 ? tau : 0.5 * tau, ox, oy;
+        edge_point(p, k, at_end ? 1.0 - t : t, ox, oy);
+        Vec3 d = output_direction(sp.cv, p.cell, ox, oy);
+        if (!continued_point(sp.cv.src, cell, d, m == 0 ? ref_x : px[0], m == 0 ? ref_y : py[0],
+                             px[m], py[m]))
+            return false;
+    }
+    if (sp.sing.kind == 1) {
+        SourcePoint q = singular_image(sp.cv.src, sp.sing, cell, s, 2.0 * px[1] - px[0], 0.0);
+        x = q.x;
+        y = q.y;
+        return true;
+    }
+    double cx, cy, unit;
+    cell_disk(sp.cv.src, cell, cx, cy, unit);
+    double a0 = std::atan2(py[0] - cy, px[0] - cx), a1 = std::atan2(py[1] - cy, px[1] - cx);
+    a0 += 2.0 * kPi * std::nearbyint((a1 - a0) / (2.0 * kPi));
+    double a = 2.0 * a1 - a0;
+    x = cx + unit * std::cos(a);
+    y = cy + unit * std::sin(a);
+    return true;
+}
+
+// Append the rim arc of a disk source from (x0, y0) through the direction of (xp, yp) to
+// (x1, y1) (all on the rim or near it), without its ends.
+void append_rim_arc(SlowPath& sp, int64_t cell, double x0, double y0, double xp, double yp,
+                    double x1, double y1) {
+    double cx, cy, unit;
+    cell_disk(sp.cv.src, cell, cx, cy, unit);
+    auto near = [](double a, double ref) {
+        return a + 2.0 * kPi * std::nearbyint((ref - a) / (2.0 * kPi));
+    };
+    double a0 = std::atan2(y0 - cy, x0 - cx);
+    double ap = near(std::atan2(yp - cy, xp - cx), a0);
+    double a1 = near(std::atan2(y1 - cy, x1 - cx), ap);
+    int steps = int(std::ceil(std::fabs(a1 - a0) / kRimStep));
+    for (int m = 1; m < steps; ++m) {
+        double a = a0 + (a1 - a0) * double(m) / double(steps);
+        sp.xs.push_back(cx + unit * std::cos(a));
+        sp.ys.push_back(cy + unit * std::sin(a));
+    }
+}
+
+// A source point just inside the piece next to the run of singular vertices first ... last:
+// which way the footprint turns around the singular point s (a half turn at a vertex on a
+// straight edge cannot tell by itself).
+bool singular_probe(const SlowPath& sp, const Piece& p, int first, int last, int64_t cell, int s,
+                    double ref_x, double ref_y, double& x, double& y) {
+    double mx = 0.5 * (p.v[first].x + p.v[last].x), my = 0.5 * (p.v[first].y + p.v[last].y);
+    if (first != last && p.v[first].arc) edge_point(p, first, 0.5, mx, my);
+    double cx, cy;
+    piece_centre(p, cx, cy);
+    double tau = 1e-3, ox = mx, oy = my;
+    for (int it = 0; it < 5; ++it) {
+        ox = mx + tau * (cx - mx);
+        oy = my + tau * (cy - my);
+        double dist = singular_distance(sp.sing, s, output_direction(sp.cv, p.cell, ox, oy));
+        if (dist > 0.0) tau = std::min(0.5, std::max(1e-12, tau * 1e-5 / dist));
+    }
+    Vec3 d = output_direction(sp.cv, p.cell, mx + tau * (cx - mx), my + tau * (cy - my));
+    return continued_point(sp.cv.src, cell, d, ref_x, ref_y, x, y);
+}
+
+// Append the footprint's stretch from the point (x, y) of vertex k over edge k and the run of
+// singular vertices after it (k + 1 ... m) to the point of vertex m + 1, exclusive: the edge
+// up to the singular point's limit, the singular point's own edge (the pole's row edge, the
+// rim arc) and the edge after the run from its limit on. Returns the vertex after the run (or
+// -1 on failure).
+int append_singular_run(SlowPath& sp, const Piece& p, const VertexFacts& f, int k, int64_t cell,
+                        double x, double y) {
+    const int n = p.n;
+    int first = (k + 1) % n, m = first, len = 1;
+    while (f.singular[(m + 1) % n] >= 0 && len < n) {
+        m = (m + 1) % n;
+        ++len;
+    }
+    double ix, iy, ox, oy;
+    if (!singular_limit(sp, p, k, true, cell, f.singular[first], x, y, ix, iy)) return -1;
+    if (p.v[k].refine && !p.v[k].seam && !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, ix, iy, 0)) return -1;
+    sp.xs.push_back(ix);
+    sp.ys.push_back(iy);
+    double qx, qy;
+    if (!singular_probe(sp, p, first, m, cell, f.singular[first], ix, iy, qx, qy)) return -1;
+    if (!singular_limit(sp, p, m, false, cell, f.singular[m], qx, qy, ox, oy)) return -1;
+    if (sp.sing.kind == 2) append_rim_arc(sp, cell, ix, iy, qx, qy, ox, oy);
+    sp.xs.push_back(ox);
+    sp.ys.push_back(oy);
+    int after = (m + 1) % n;
+    double nx, ny;
+    if (!vertex_image(sp, p, f, after, cell, ox, oy, nx, ny)) return -1;
+    if (p.v[m].refine && !p.v[m].seam && !refine_edge(sp, p, m, cell, 0.0, ox, oy, 1.0, nx, ny, 0)) return -1;
+    return after;
+}
+
+// The footprint of the piece in source cell `cell`, into sp.xs, sp.ys; false when it cannot
+// be built there (a vertex without a point in the cell, an edge that leaves it).
+bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t cell) {
+    sp.xs.clear();
+    sp.ys.clear();
+    const int n = p.n;
+    int k0 = 0;
+    while (k0 < n && f.singular[k0] >= 0) ++k0;
+    if (k0 == n) return false;
+    double rx = p.v[k0].mapped ? p.v[k0].src.x : 0.0, ry = p.v[k0].mapped ? p.v[k0].src.y : 0.0;
+    if (!p.v[k0].mapped) {
+        SourcePoint s = source_of(sp.cv.src, f.dir[k0]);
+        rx = s.x;
+        ry = s.y;
+    }
+    int k = k0;
+    do {
+        double x, y;
+        if (!vertex_image(sp, p, f, k, cell, rx, ry, x, y)) return false;
+        sp.xs.push_back(x);
+        sp.ys.push_back(y);
+        int next = (k + 1) % n;
+        if (f.singular[next] >= 0) {
+            k = append_singular_run(sp, p, f, k, cell, x, y);
+            if (k < 0) return false;
+        } else {
+            double nx, ny;
+            if (!vertex_image(sp, p, f, next, cell, x, y, nx, ny)) return false;
+            if (p.v[k].refine && !p.v[k].seam && !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0))
+                return false;
+            k = next;
+        }
+        rx = sp.xs.back();
+        ry = sp.ys.back();
+    } while (k != k0);
+    return true;
+}
+
+// Close a footprint around singular point s inside its piece: around a lat-long pole, the
+// outline's columns have drifted by a whole turn, and the pole's row edge closes it; around
+// -Z of a disk, the outline circles the rim, and the footprint is what lies between the two
+// (the rim traversed against the outline). False when the outline does not wind as it should.
+bool close_around_singular(SlowPath& sp, int64_t cell, int s) {
+    const Geometry& g = sp.cv.src;
+    size_t n = sp.xs.size();
+    if (sp.sing.kind == 1) {
+        double period = double(2 * g.n), jump = sp.xs[0] - sp.xs[n - 1];
+        double drift = -period * std::nearbyint(jump / period);
+        if (drift == 0.0) return false;
+        double pole = singular_image(g, sp.sing, cell, s, 0.0, 0.0).y;
+        double x0 = sp.xs[0], y0 = sp.ys[0];
+        sp.xs.insert(sp.xs.end(), {x0 + drift, x0 + drift, x0});
+        sp.ys.insert(sp.ys.end(), {y0, pole, pole});
+        return true;
+    }
+    double cx, cy, unit;
+    cell_disk(g, cell, cx, cy, unit);
+    double turn = 0.0;
+    for (size_t k = 0; k < n; ++k) {
+        size_t l = (k + 1) % n;
+        double da = std::atan2(sp.ys[l] - cy, sp.xs[l] - cx) - std::atan2(sp.ys[k] - cy, sp.xs[k] - cx);
+        turn += da - 2.0 * kPi * std::nearbyint(da / (2.0 * kPi));
+    }
+    if (std::fabs(turn) < kPi) return false;
+    double a0 = std::atan2(sp.ys[0] - cy, sp.xs[0] - cx), step = turn > 0.0 ? -1.0 : 1.0;
+    int steps = int(std::ceil(2.0 * kPi / kRimStep));
+    sp.xs.push_back(sp.xs[0]);
+    sp.ys.push_back(sp.ys[0]);
+    for (int m = 0; m <= steps; ++m) {
+        double a = a0 + step * 2.0 * kPi * double(m) / double(steps);
+        sp.xs.push_back(cx + unit * std::cos(a));
+        sp.ys.push_back(cy + unit * std::sin(a));
+    }
+    return true;
+}
+
+void process_piece(SlowPath& sp, Piece& p, int depth);
+
+// Cut the piece where its edges cross from one source cell to another (bisection), along the
+// chord between the two crossings; false unless there are exactly two.
+bool split_at_seam(SlowPath& sp, const Piece& p, const VertexFacts& f, int depth) {
+    Piece q = p;
+    q.n = 0;
+    int cross[2], count = 0;
+    for (int k = 0; k < p.n; ++k) {
+        if (q.n >= kPieceVertices - 1) return false;
+        q.v[q.n++] = p.v[k];
+        int next = (k + 1) % p.n;
+        if (f.singular[k] >= 0 || f.singular[next] >= 0 || p.v[k].boundary ||
+            p.v[next].boundary || f.cell[k] == f.cell[next])
+            continue;
+        double lo = 0.0, hi = 1.0;
+        for (int it = 0; it < 52; ++it) {
+            double t = 0.5 * (lo + hi), ox, oy;
+            edge_point(p, k, t, ox, oy);
+            int64_t c = source_of(sp.cv.src, output_direction(sp.cv, p.cell, ox, oy)).cell;
+            (c == f.cell[k] ? lo : hi) = t;
+        }
+        PieceVertex v = p.v[k];
+        edge_point(p, k, 0.5 * (lo + hi), v.x, v.y);
+        v.mapped = false;
+        v.boundary = true;
+        v.snapped = -1;
+        if (count == 2) return false;
+        cross[count++] = q.n;
+        q.v[q.n++] = v;
+    }
+    if (count != 2) return false;
+    for (int side = 0; side < 2; ++side) {
+        Piece part = q;
+        part.n = 0;
+        int from = cross[side], to = cross[1 - side];
+        for (int k = from;; k = (k + 1) % q.n) {
+            part.v[part.n++] = q.v[k];
+            if (k == to) break;
+        }
+        part.v[part.n - 1].arc = false;
+        part.v[part.n - 1].seam = true;
+        process_piece(sp, part, depth + 1);
+    }
+    return true;
+}
+
+// Split the piece in four at the middle of its bounding box.
+void split_in_four(SlowPath& sp, const Piece& p, int depth) {
+    double x0 = p.v[0].x, x1 = x0, y0 = p.v[0].y, y1 = y0;
+    for (int k = 1; k < p.n; ++k) {
+        x0 = std::min(x0, p.v[k].x);
+        x1 = std::max(x1, p.v[k].x);
+        y0 = std::min(y0, p.v[k].y);
+        y1 = std::max(y1, p.v[k].y);
+    }
+    double xm = 0.5 * (x0 + x1), ym = 0.5 * (y0 + y1);
+    for (int q = 0; q < 4; ++q) {
+        Piece half, quarter;
+        clip_piece(p, 1.0, 0.0, xm, q % 2 == 0, half);
+        if (half.n == 0) continue;
+        clip_piece(half, 0.0, 1.0, ym, q / 2 == 0, quarter);
+        if (quarter.n == 0) continue;
+        process_piece(sp, quarter, depth + 1);
+    }
+}
+
+// Integrate one piece of an output pixel into the pixel's sums.
+void process_piece(SlowPath& sp, Piece& p, int depth) {
+    if (p.n < 2) return;
+    if (depth > kMaxPieceDepth) {
+        add_leftover(sp, p);
+        return;
+    }
+    bool closure[2] = {false, false};
+    place_singular(sp, p, closure);
+    VertexFacts f;
+    vertex_facts(sp, p, f);
+    int64_t cell = -1;
+    bool several = false;
+    for (int k = 0; k < p.n; ++k) {
+        if (f.singular[k] >= 0 || p.v[k].boundary) continue;
+        if (cell < 0) cell = f.cell[k];
+        else if (f.cell[k] != cell) several = true;
+    }
+    if (several) {
+        if (!split_at_seam(sp, p, f, depth)) split_in_four(sp, p, depth);
+        return;
+    }
+    if (cell < 0) {
+        double cx, cy;
+        piece_centre(p, cx, cy);
+        cell = source_of(sp.cv.src, output_direction(sp.cv, p.cell, cx, cy)).cell;
+    }
+    bool built = build_footprint(sp, p, f, cell);
+    for (int s = 0; built && s < 2; ++s)
+        if (closure[s]) built = close_around_singular(sp, cell, s);
+    if (!built) {
+        split_in_four(sp, p, depth);
+        return;
+    }
+    add_footprint(sp, cell);
+}
+
+// The rectangle [x0, x1] x [y0, y1] of output cell `cell` as a piece, its corners carrying
+// `corners` (the pixel's own corners, in the order (x0, y0), (x1, y0), (x1, y1), (x0, y1))
+// where they are the pixel's.
+// Whether each side of the output rectangle [x0, x1] x [y0, y1] of `cell` (from corner k, in
+// the order (x0, y0), (x1, y0), (x1, y1), (x0, y1), to corner k + 1) is refined: edge_near of
+// its corners' points (`corners` when given, else mapped exactly).
+void near_sides(const SlowPath& sp, int64_t cell, double x0, double y0, double x1, double y1,
+                const SourcePoint* corners, bool near[4]) {
+    const double xs[4] = {x0, x1, x1, x0}, ys[4] = {y0, y0, y1, y1};
+    Vec3 d[4];
+    SourcePoint p[4];
+    for (int k = 0; k < 4; ++k) {
+        if (corners) {
+            p[k] = corners[k];
+            d[k] = source_direction(sp.cv.src, p[k]);
+        } else {
+            d[k] = output_direction(sp.cv, cell, xs[k], ys[k]);
+            p[k] = source_of(sp.cv.src, d[k]);
+        }
+    }
+    for (int k = 0; k < 4; ++k) {
+        int l = (k + 1) % 4;
+        near[k] = edge_near(sp.cv, sp.sing, cell, xs[k], ys[k], xs[l], ys[l], d[k], d[l], p[k], p[l]);
+    }
+}
+
+// Mark each straight edge of the piece that runs along a side of the rectangle [x0, x1] x
+// [y0, y1] with that side's flag; other edges (arcs, cuts) are refined.
+void mark_sides(Piece& p, double x0, double y0, double x1, double y1, const bool near[4]) {
+    for (int k = 0; k < p.n; ++k) {
+        PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
+        int side = -1;
+        if (!s.arc) {
+            if (s.y == y0 && e.y == y0) side = 0;
+            else if (s.x == x1 && e.x == x1) side = 1;
+            else if (s.y == y1 && e.y == y1) side = 2;
+            else if (s.x == x0 && e.x == x0) side = 3;
+        }
+        s.refine = side < 0 || near[side];
+    }
+}
+
+Piece rect_piece(int64_t cell, double x0, double y0, double x1, double y1,
+                 const SourcePoint* corners, const double* pixel) {
+    Piece p;
+    p.cell = cell;
+    p.cx = p.cy = p.r = 0.0;
+    p.n = 4;
+    const double xs[4] = {x0, x1, x1, x0}, ys[4] = {y0, y0, y1, y1};
+    for (int k = 0; k < 4; ++k) {
+        p.v[k] = plain_vertex(xs[k], ys[k]);
+        if (corners && xs[k] == pixel[k == 1 || k == 2 ? 2 : 0] &&
+            ys[k] == pixel[k >= 2 ? 3 : 1]) {
+            p.v[k].mapped = true;
+            p.v[k].src = corners[k];
+        }
+    }
+    return p;
+}
+
+// The readable part of a disk cell's rectangle: inside the readable circle (everything with
+// --guard fill), as one piece for a paraboloid; for a mirror ball or an angular map, whose
+// rim circle maps to the single direction -Z, the valid disk as one piece and the guard ring
+// around it as 4 x 4 centre samples.
+void disk_pieces(SlowPath& sp, int64_t cell, double x0, double y0, double x1, double y1) {
+    const Geometry& d = sp.cv.dst;
+    double cx, cy, unit;
+    cell_disk(d, cell, cx, cy, unit);
+    double readable = unit + double(d.guard);
+    bool singular_rim = d.family != kParaboloid;
+    Piece p;
+    p.cell = cell;
+    p.cx = cx;
+    p.cy = cy;
+    p.r = singular_rim ? unit : readable;
+    if (sp.cv.fill && !singular_rim) {
+        p = rect_piece(cell, x0, y0, x1, y1, nullptr, nullptr);
+    } else {
+        clip_square_to_circle(x0, y0, x1, y1, cx, cy, p.r, p);
+    }
+    if (p.n > 0) {
+        bool near[4];
+        near_sides(sp, cell, x0, y0, x1, y1, nullptr, near);
+        mark_sides(p, x0, y0, x1, y1, near);
+        process_piece(sp, p, 0);
+    }
+    if (!singular_rim || (d.guard == 0 && !sp.cv.fill)) return;
+    const int sub = 4;
+    for (int q = 0; q < sub * sub; ++q) {
+        double qx0 = x0 + (x1 - x0) * double(q % sub) / sub, qx1 = qx0 + (x1 - x0) / sub;
+        double qy0 = y0 + (y1 - y0) * double(q / sub) / sub, qy1 = qy0 + (y1 - y0) / sub;
+        double r = std::hypot(0.5 * (qx0 + qx1) - cx, 0.5 * (qy0 + qy1) - cy);
+        if (r <= unit || (!sp.cv.fill && r > readable)) continue;
+        add_leftover(sp, rect_piece(cell, qx0, qy0, qx1, qy1, nullptr, nullptr));
+    }
+}
+
+}  // namespace
+
+void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
+               const SourcePoint* corners) {
+    const Geometry& d = sp.cv.dst;
+    const double cw = double(d.cell_width()), ch = double(d.cell_height());
+    const double pixel[4] = {x0, y0, x1, y1};
+    int64_t col0 = std::max<int64_t>(0, floor_index(x0 / cw));
+    int64_t col1 = std::min<int64_t>(d.columns - 1, floor_index(std::nextafter(x1, x0) / cw));
+    int64_t row0 = std::max<int64_t>(0, floor_index(y0 / ch));
+    int64_t row1 = std::min<int64_t>(d.rows - 1, floor_index(std::nextafter(y1, y0) / ch));
+    for (int64_t row = row0; row <= row1; ++row) {
+        for (int64_t col = col0; col <= col1; ++col) {
+            int64_t cell = row * d.columns + col;
+            double ax = std::max(x0, double(col) * cw), bx = std::min(x1, double(col + 1) * cw);
+            double ay = std::max(y0, double(row) * ch), by = std::min(y1, double(row + 1) * ch);
+            if (!(bx > ax && by > ay)) continue;
+            if (d.cell_face[cell] < 0) {
+                if (!sp.cv.fill) continue;
+                // An empty cell under --guard fill: its nearest face's continued mapping.
+                int64_t near = nearest_cell(d, 0.5 * (ax + bx), 0.5 * (ay + by));
+                Piece p = rect_piece(near, ax, ay, bx, by, nullptr, nullptr);
+                process_piece(sp, p, 0);
+            } else if (d.disk()) {
+                disk_pieces(sp, cell, ax, ay, bx, by);
+            } else {
+                Piece p = rect_piece(cell, ax, ay, bx, by, corners, pixel);
+                bool near[4];
+                const bool whole = ax == x0 && ay == y0 && bx == x1 && by == y1;
+                near_sides(sp, cell, ax, ay, bx, by, whole ? corners : nullptr, near);
+                mark_sides(p, ax, ay, bx, by, near);
+                process_piece(sp, p, 0);
+            }
+        }
+    }
+}
+
+}  // namespace envconv

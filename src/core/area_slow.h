@@ -1,0 +1,159 @@
+// The area filter's general path: one piece of an output pixel at a time, its footprint in
+// the source built exactly and integrated (area_pieces.h, green.h).
+//
+// A piece's footprint is the polygon of its vertices' source points in one source cell's
+// coordinates, each edge refined where the image of its midpoint strays more than kChordTol
+// texels from the chord (recursively). Where the piece's vertices fall in several source cells
+// (cube faces, paraboloid halves, tennisball bands), its edges are bisected to the seam and the
+// piece is cut along the chord between the two crossings, each side integrated in its own cell:
+// the cut's two ends lie on the seam, so a cube face's side of the footprint ends exactly on
+// the face's edge. A source singular point (a lat-long pole, a mirror ball's -Z) on the piece's
+// boundary becomes a run of its edge (the pole's row edge, the rim arc) between the limits of
+// the adjacent edges; one inside the piece closes the footprint around it. Anything else that
+// does not resolve (three cells at a cube corner, a seam that bulges between two vertices)
+// splits the piece in four, down to kMaxPieceDepth; the last leftover piece is read at its
+// centre with its own solid angle.
+#pragma once
+
+#include <cmath>
+#include <vector>
+
+#include "area_map.h"
+#include "green.h"
+
+namespace envconv {
+
+// Pixel edges near a singular direction or across a fold (area_map.h edge_near) are refined
+// until their images stray less than kChordTol from their chords, and an interpolated corner
+// may be kCornerTol from its exact image (area_tiles.h); both in output pixels: how far the
+// footprint's outline is off, as a share of the pixel it bounds (the share of its solid angle
+// misplaced). Other pixel edges are chords: their images bend, but a pixel's opposite edges
+// bend alike, so that what one takes from the pixel the other gives back. Both depend on the
+// edge alone, so the two pixels that share an edge agree on it.
+constexpr double kChordTol = 1e-3;
+constexpr double kCornerTol = 1e-3;
+constexpr int kMaxRefine = 16;       // halvings of an edge
+constexpr int kMaxPieceDepth = 8;    // splits of a piece
+constexpr double kSnap = 1e-5;       // output pixels: a singular point this near the boundary is on it
+constexpr double kRimStep = 2e-3;    // rad: steps of a rim arc in a disk source
+
+// A pixel's running sums: colour times solid angle, and solid angle (sr).
+struct PixelSums {
+    double* acc;
+    int64_t nch;
+    double weight;
+};
+
+// Everything the general path needs; one per band (scratch inside).
+struct SlowPath {
+    const Conversion& cv;
+    const SourceModel& model;
+    const Singular& sing;
+    GreenScratch green;
+    std::vector<double> xs, ys;
+    PixelSums* sums = nullptr;
+
+    SlowPath(const Conversion& cv_, const SourceModel& model_, const Singular& sing_)
+        : cv(cv_), model(model_), sing(sing_) {}
+};
+
+// Sink of green.h: solid angle of each texel's piece (the texel's density model) and its
+// colour, read through area_texel.
+struct TexelSink {
+    static constexpr bool kMomentX = true;
+    const SourceModel& model;
+    int64_t cell;
+    double sign;
+    PixelSums& sums;
+    bool flat(int64_t, int64_t) const { return false; }
+    void row(int64_t) {}
+    void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
+        TexelDensity t = model.texel(cell, ix, iy);
+        double w = sign * (t.m * area + t.gx * dx + t.gy * dy);
+        if (w == 0.0) return;
+        const float* v = area_texel(model.image, model.g, cell, ix, iy);
+        for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
+        sums.weight += w;
+    }
+};
+
+// Integrate the closed polygon (sp.xs, sp.ys) of source cell `cell` into the pixel's sums.
+inline void add_footprint(SlowPath& sp, int64_t cell) {
+    int n = int(sp.xs.size());
+    if (n < 3) return;
+    double area, mx, my;
+    polygon_moments(sp.xs.data(), sp.ys.data(), n, area, mx, my);
+    if (!(std::fabs(area) > 0.0)) return;
+    TexelSink sink{sp.model, cell, area > 0.0 ? 1.0 : -1.0, *sp.sums};
+    integrate_any(sp.xs.data(), sp.ys.data(), n, sink, sp.green);
+}
+
+// A piece that did not resolve: the texel at its centre, with the piece's own solid angle.
+inline void add_leftover(SlowPath& sp, const Piece& p) {
+    double cx = 0.0, cy = 0.0, area = 0.0;
+    for (int k = 0; k < p.n; ++k) {
+        const PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
+        cx += s.x;
+        cy += s.y;
+        area += s.x * e.y - e.x * s.y;
+    }
+    cx /= p.n;
+    cy /= p.n;
+    const Geometry& d = sp.cv.dst;
+    double a, b;
+    cell_local(d, p.cell, cx, cy, a, b);
+    double w = 0.5 * std::fabs(area) * density(d.family, d.cell_face[p.cell], a, b) *
+               (2.0 / double(d.aspect * d.n)) * (2.0 / double(d.n));
+    if (!(w > 0.0)) return;
+    SourcePoint s = source_of(sp.cv.src, output_direction(sp.cv, p.cell, cx, cy));
+    const float* v = area_texel(sp.model.image, sp.cv.src, s.cell, floor_index(s.x),
+                                floor_index(s.y));
+    for (int64_t c = 0; c < sp.sums->nch; ++c) sp.sums->acc[c] += w * double(v[c]);
+    sp.sums->weight += w;
+}
+
+// Per-vertex facts of a piece: source direction, true cell, singular index (-1 if none).
+struct VertexFacts {
+    Vec3 dir[kPieceVertices];
+    int64_t cell[kPieceVertices];
+    int singular[kPieceVertices];
+};
+
+inline void vertex_facts(const SlowPath& sp, Piece& p, VertexFacts& f) {
+    for (int k = 0; k < p.n; ++k) {
+        PieceVertex& v = p.v[k];
+        f.dir[k] = v.mapped ? source_direction(sp.cv.src, v.src)
+                            : output_direction(sp.cv, p.cell, v.x, v.y);
+        int s = on_singular(sp.sing, f.dir[k]);
+        if (s < 0 && v.snapped >= 0) s = v.snapped;
+        f.singular[k] = s;
+        f.cell[k] = source_of(sp.cv.src, f.dir[k]).cell;
+    }
+}
+
+// The source point of piece vertex k in cell C, near (ref_x, ref_y): its own point where it
+// has one in C (the copy nearest ref where columns repeat), else its direction's.
+inline bool vertex_image(const SlowPath& sp, const Piece& p, const VertexFacts& f, int k,
+                         int64_t cell, double ref_x, double ref_y, double& x, double& y) {
+    const PieceVertex& v = p.v[k];
+    const Geometry& g = sp.cv.src;
+    if (v.mapped && v.src.cell == cell && g.family != kOctahedral && g.family != kEqualArea) {
+        x = v.src.x;
+        y = v.src.y;
+        if (g.family == kLatlong || g.family == kTennisball) {
+            double period = double(g.family == kLatlong ? 2 * g.n : 4 * g.n);
+            x += period * std::nearbyint((ref_x - x) / period);
+        }
+        return true;
+    }
+    return continued_point(g, cell, f.dir[k], ref_x, ref_y, x, y);
+}
+
+// Integrate the output rectangle [x0, x1] x [y0, y1] (level-0 output pixels: a pixel, or a
+// sub-pixel) into *sp.sums: its piece in every output cell it meets, through that cell's map.
+// `corners`, when not null, are the source points of the rectangle's corners (x0, y0),
+// (x1, y0), (x1, y1), (x0, y1), as the pixels around it use them.
+void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
+               const SourcePoint* corners);
+
+}  // namespace envconv
