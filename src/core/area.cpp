@@ -134,14 +134,15 @@ struct DirectSink {
 
 template <bool kRows, int NCH>
 void direct_pixel(const SourceModel& model, int64_t cell, int64_t row0, int64_t period,
-                  const double* xs, const double* ys, PixelSums& sums, GreenScratch& green) {
-    double area = 0.5 * ((xs[0] - xs[2]) * (ys[1] - ys[3]) - (xs[1] - xs[3]) * (ys[0] - ys[2]));
+                  const double* xs, const double* ys, int n, PixelSums& sums, GreenScratch& green) {
+    double area, mx, my;
+    polygon_moments(xs, ys, n, area, mx, my);
     DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums};
-    integrate_any(xs, ys, 4, sink, green);
+    integrate_any(xs, ys, n, sink, green);
 }
 
 using DirectPixel = void (*)(const SourceModel&, int64_t, int64_t, int64_t, const double*,
-                             const double*, PixelSums&, GreenScratch&);
+                             const double*, int, PixelSums&, GreenScratch&);
 
 DirectPixel direct_pixel_for(bool rows, int64_t nch) {
     if (rows) {
@@ -183,8 +184,9 @@ bool direct_quad(const Geometry& g, int64_t cell, const double* xs, const double
 // Per-band scratch of the direct path.
 struct TileScratch {
     std::vector<char> direct;  // per pixel of the tile: integrate directly
+    bool curved = false;       // the tile's edges are polylines (EdgeMemo::first, px, py)
     std::vector<SourcePoint> column;  // exact points of the last tile's right column
-    std::vector<Vec3> dirs;           // source direction of every corner of a tile
+
     PrefixTable table;
     EdgeMemo edges;
 };
@@ -193,14 +195,30 @@ struct TileScratch {
 // pixel rows one at a time, and a row that still does, its pixels one at a time.
 constexpr int64_t kMaxTableTexels = int64_t(1) << 16;
 
-// Integral of the grid's edge from corner a to corner b through the tile's table.
+// Integral of the grid's edge from corner a to corner b through the tile's table, along its
+// polyline (count refinement points px, py) in a curved tile.
 template <int NCH, bool kGrad>
 void grid_edge(const AreaJob& job, const CornerGrid& g, const PrefixTable& t, int64_t row_base,
-               size_t a, size_t b, double* out) {
+               size_t a, size_t b, double* out, const double* px = nullptr,
+               const double* py = nullptr, int count = 0) {
     const int64_t nch = NCH ? NCH : t.nch;
     for (int64_t c = 0; c <= nch; ++c) out[c] = 0.0;
-    edge_integral<NCH, kGrad>(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a], g.x[b],
-                              g.y[b], g.fx[b], g.fy[b], out);
+    if (count == 0) {
+        edge_integral<NCH, kGrad>(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a],
+                                  g.x[b], g.y[b], g.fx[b], g.fy[b], out);
+        return;
+    }
+    double x0 = g.x[a], y0 = g.y[a];
+    int64_t fx0 = g.fx[a], fy0 = g.fy[a];
+    for (int k = 0; k <= count; ++k) {
+        double x1 = k < count ? px[k] : g.x[b], y1 = k < count ? py[k] : g.y[b];
+        int64_t fx1 = k < count ? floor_texel(x1) : g.fx[b], fy1 = k < count ? floor_texel(y1) : g.fy[b];
+        edge_integral<NCH, kGrad>(t, job.model, row_base, x0, y0, fx0, fy0, x1, y1, fx1, fy1, out);
+        x0 = x1;
+        y0 = y1;
+        fx0 = fx1;
+        fy0 = fy1;
+    }
 }
 
 // Integrate every edge of the direct pixels of rows [j0, j1) of the tile (independent loops,
@@ -215,20 +233,35 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
     const int w = g.w;
     const size_t cs = size_t(w + 1);  // corners per grid row
     const char* dir = ts.direct.data();
+    // A curved tile's edges run along their polylines.
+    auto polyline = [&](size_t index, const double*& px, const double*& py, int& count) {
+        if (!ts.curved) return;
+        px = e.px.data() + e.first[index];
+        py = e.py.data() + e.first[index];
+        count = e.first[index + 1] - e.first[index];
+    };
     for (int j = j0; j <= j1; ++j) {
         const char* above = j > j0 ? dir + (j - 1) * w : nullptr;
         const char* below = j < j1 ? dir + j * w : nullptr;
-        for (int i = 0; i < w; ++i)
-            if ((above && above[i]) || (below && below[i]))
-                grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, j * cs + i + 1,
-                                      &e.hv[size_t(j * w + i) * st]);
+        for (int i = 0; i < w; ++i) {
+            if (!((above && above[i]) || (below && below[i]))) continue;
+            const double *px = nullptr, *py = nullptr;
+            int count = 0;
+            polyline(e.horizontal(i, j), px, py, count);
+            grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, j * cs + i + 1,
+                                  &e.hv[size_t(j * w + i) * st], px, py, count);
+        }
     }
     for (int j = j0; j < j1; ++j) {
         const char* row = dir + j * w;
-        for (int i = 0; i <= w; ++i)
-            if ((i > 0 && row[i - 1]) || (i < w && row[i]))
-                grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, (j + 1) * cs + i,
-                                      &e.vv[size_t(j * (w + 1) + i) * st]);
+        for (int i = 0; i <= w; ++i) {
+            if (!((i > 0 && row[i - 1]) || (i < w && row[i]))) continue;
+            const double *px = nullptr, *py = nullptr;
+            int count = 0;
+            polyline(e.vertical(i, j), px, py, count);
+            grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, (j + 1) * cs + i,
+                                  &e.vv[size_t(j * (w + 1) + i) * st], px, py, count);
+        }
     }
     for (int j = j0; j < j1; ++j) {
         const char* row = dir + j * w;
@@ -284,6 +317,14 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
         }
     }
     if (xmin > xmax) return false;
+    if (ts.curved) {  // a curved tile's polylines may bulge past their corners
+        for (size_t k = 0; k < ts.edges.px.size(); ++k) {
+            xmin = std::min(xmin, ts.edges.px[k]);
+            xmax = std::max(xmax, ts.edges.px[k]);
+            ymin = std::min(ymin, ts.edges.py[k]);
+            ymax = std::max(ymax, ts.edges.py[k]);
+        }
+    }
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax), r0 = floor_texel(ymin), r1 = floor_texel(ymax);
     if ((c1 - c0 + 1) * (r1 - r0 + 1) > kMaxTableTexels) return false;
     const int64_t row_base = (g.ref_cell / s.columns) * s.cell_height();
@@ -314,46 +355,120 @@ bool whole_tile_direct(const Geometry& g, const CornerGrid& grid) {
     return xmin > x0 + margin && xmax < x0 + w - margin;
 }
 
-// True when an edge of the tile might be one that edge_near refines (area_map.h): the tile
-// reaches within twice kNearLengths pixels of a singular direction, or crosses a fold.
-bool tile_maybe_near(const AreaJob& job, const CornerGrid& g, int64_t cell) {
-    const Conversion& cv = job.cv;
-    const size_t corners[4] = {g.at(0, 0), g.at(g.w, 0), g.at(g.w, g.h), g.at(0, g.h)};
-    Vec3 d[4], c{0.0, 0.0, 0.0};
-    for (int k = 0; k < 4; ++k) {
-        d[k] = source_direction(cv.src, g.exact[corners[k]]);
-        c = {c.x + d[k].x, c.y + d[k].y, c.z + d[k].z};
-    }
-    c = normalized(c.x, c.y, c.z);
-    auto dist = [](const Vec3& a, const Vec3& b) {
-        return std::sqrt((a.x - b.x) * (a.x - b.x) + (a.y - b.y) * (a.y - b.y) + (a.z - b.z) * (a.z - b.z));
+// The footprint of pixel (i, j) of the grid into xs, ys: its corners and, in a curved tile,
+// the refinement points of its edges, around the pixel (i, j) -> (i + 1, j) -> (i + 1, j + 1)
+// -> (i, j + 1).
+void pixel_polygon(const CornerGrid& g, const TileScratch& ts, int i, int j,
+                   std::vector<double>& xs, std::vector<double>& ys) {
+    const EdgeMemo& e = ts.edges;
+    xs.clear();
+    ys.clear();
+    auto side = [&](size_t corner, size_t index, bool reverse) {
+        xs.push_back(g.x[corner]);
+        ys.push_back(g.y[corner]);
+        if (!ts.curved) return;
+        int32_t a = e.first[index], b = e.first[index + 1];
+        for (int32_t k = 0; k < b - a; ++k) {
+            int32_t m = reverse ? b - 1 - k : a + k;
+            xs.push_back(e.px[size_t(m)]);
+            ys.push_back(e.py[size_t(m)]);
+        }
     };
-    double radius = 0.0;
-    for (int k = 0; k < 4; ++k) radius = std::max(radius, dist(d[k], c));
-    double pixel = std::min(dist(d[1], d[0]) / g.w, dist(d[3], d[0]) / g.h);
-    for (int k = 0; k < job.sing.near_count; ++k)
-        if (dist(job.sing.near[k], c) <= radius + 2.0 * kNearLengths * pixel) return true;
-    double x0 = double(g.i0) * cv.scale_x, y0 = double(g.j0) * cv.scale_y;
-    double x1 = double(g.i0 + g.w) * cv.scale_x, y1 = double(g.j0 + g.h) * cv.scale_y;
-    if (!output_smooth(cv.dst, cell, x0, y0, x1, y1)) return true;
-    return cv.src.family == kOctahedral || cv.src.family == kEqualArea;  // folds: test pixels
+    side(g.at(i, j), e.horizontal(i, j), false);
+    side(g.at(i + 1, j), e.vertical(i + 1, j), false);
+    side(g.at(i + 1, j + 1), e.horizontal(i, j + 1), true);
+    side(g.at(i, j + 1), e.vertical(i, j), true);
 }
 
-// True when an edge of pixel (i, j) of the grid is one edge_near refines (dirs: the source
-// direction of every corner of the grid).
-bool pixel_near(const AreaJob& job, const CornerGrid& g, const std::vector<Vec3>& dirs,
-                int64_t cell, int i, int j) {
-    const Conversion& cv = job.cv;
-    const size_t k[4] = {g.at(i, j), g.at(i + 1, j), g.at(i + 1, j + 1), g.at(i, j + 1)};
-    const double ox[4] = {double(g.i0 + i), double(g.i0 + i + 1), double(g.i0 + i + 1), double(g.i0 + i)};
-    const double oy[4] = {double(g.j0 + j), double(g.j0 + j), double(g.j0 + j + 1), double(g.j0 + j + 1)};
-    for (int q = 0; q < 4; ++q) {
-        int r = (q + 1) % 4;
-        if (edge_near(cv, job.sing, cell, ox[q] * cv.scale_x, oy[q] * cv.scale_y, ox[r] * cv.scale_x,
-                      oy[r] * cv.scale_y, dirs[k[q]], dirs[k[r]], g.exact[k[q]], g.exact[k[r]]))
-            return true;
+// True when a fold of the output or source map (area_map.h) may touch the tile.
+bool tile_on_fold(const Conversion& cv, const CornerGrid& g, int64_t cell) {
+    if (cv.src.family == kOctahedral || cv.src.family == kEqualArea) return true;
+    if (cv.dst.family != kOctahedral && cv.dst.family != kEqualArea) return false;
+    double a0, b0, a1, b1;  // the tile's (a, b) box, its edges included
+    cell_local(cv.dst, cell, double(g.i0) * cv.scale_x, double(g.j0) * cv.scale_y, a0, b0);
+    cell_local(cv.dst, cell, double(g.i0 + g.w) * cv.scale_x, double(g.j0 + g.h) * cv.scale_y, a1, b1);
+    double alo = std::min(a0, a1), ahi = std::max(a0, a1), blo = std::min(b0, b1), bhi = std::max(b0, b1);
+    for (double line : {-1.0, 0.0, 1.0})
+        if ((alo <= line && line <= ahi) || (blo <= line && line <= bhi)) return true;
+    double lo = 1e300, hi = -1e300;
+    for (double a : {alo, ahi}) {
+        for (double b : {blo, bhi}) {
+            lo = std::min(lo, std::fabs(a) + std::fabs(b));
+            hi = std::max(hi, std::fabs(a) + std::fabs(b));
+        }
     }
-    return false;
+    return lo <= 1.0 && 1.0 <= hi;
+}
+
+// How far (output pixels across) the image of the grid's inside edge from corner (i, j) to
+// (i + di, j + dj) strays from its chord, as the grid estimates it: the second differences
+// along its line at its two ends, across the line, over the spacing of the lines on either
+// side, over eight. -1 (no estimate) at the ends of a line, or where the two ends' second
+// differences disagree by more than a quarter of kChordTol (the bend changes along the edge,
+// as near a pole, where an estimate would not hold).
+double edge_bend(const CornerGrid& g, int i, int j, int di, int dj) {
+    const double *x = g.x.data(), *y = g.y.data();
+    const int n = di ? g.w : g.h, at = di ? i : j;  // position along the line
+    if (at < 1 || at + 2 > n) return -1.0;
+    const int64_t step = di ? 1 : g.w + 1, across = di ? g.w + 1 : 1;
+    const int64_t k0 = int64_t(g.at(i, j)), k1 = k0 + step;
+    double ax = x[k0 - step] - 2.0 * x[k0] + x[k1], ay = y[k0 - step] - 2.0 * y[k0] + y[k1];
+    double bx = x[k0] - 2.0 * x[k1] + x[k1 + step], by = y[k0] - 2.0 * y[k1] + y[k1 + step];
+    double tx = x[k1] - x[k0], ty = y[k1] - y[k0];
+    double sx = 0.5 * (x[k0 + across] - x[k0 - across]), sy = 0.5 * (y[k0 + across] - y[k0 - across]);
+    double spacing = std::fabs(tx * sy - ty * sx);
+    if (!(spacing > 0.0)) return -1.0;
+    double bend_a = std::fabs(tx * ay - ty * ax) / spacing / 8.0;
+    double bend_b = std::fabs(tx * by - ty * bx) / spacing / 8.0;
+    if (std::fabs(bend_a - bend_b) > 0.25 * kChordTol) return -1.0;
+    return 0.5 * (bend_a + bend_b);
+}
+
+// Decide every edge of a curved tile, once for the pixels on both sides: a chord where the
+// grid's estimate of its bend is within kChordTol (inside edges away from folds), else the
+// polyline of refine_segment (in the reference cell), exact on the tile's boundary so that the
+// next tile decides the same. ts.edges.refine records the decision for the general path (1:
+// refined, 0: chord, -1: could not be refined in the reference cell, whose pixels are then not
+// direct).
+void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t cell) {
+    const Conversion& cv = job.cv;
+    EdgeMemo& e = ts.edges;
+    const int w = g.w, h = g.h;
+    const size_t edges = size_t((h + 1) * w + h * (w + 1));
+    e.first.assign(edges + 1, 0);
+    e.refine.assign(edges, 0);
+    e.px.clear();
+    e.py.clear();
+    auto edge = [&](size_t index, int i0, int j0, int di, int dj, bool inside) {
+        e.first[index] = int32_t(e.px.size());
+        size_t a = g.at(i0, j0), b = g.at(i0 + di, j0 + dj);
+        double ox0 = double(g.i0 + i0) * cv.scale_x, oy0 = double(g.j0 + j0) * cv.scale_y;
+        double ox1 = double(g.i0 + i0 + di) * cv.scale_x, oy1 = double(g.j0 + j0 + dj) * cv.scale_y;
+        bool fold = edge_on_fold(cv, cell, ox0, oy0, ox1, oy1, g.exact[a], g.exact[b]);
+        if (!fold && inside) {
+            double bend = edge_bend(g, i0, j0, di, dj);
+            if (bend >= 0.0 && bend <= 0.5 * kChordTol) return;
+        }
+        e.refine[index] = 1;
+        if (!refine_segment(cv, job.sing, cell, ox0, oy0, ox1, oy1, g.ref_cell, g.x[a], g.y[a], g.x[b],
+                            g.y[b], fold ? 0.25 * kChordTol : kChordTol, e.px, e.py)) {
+            e.px.resize(size_t(e.first[index]));
+            e.py.resize(size_t(e.first[index]));
+            e.refine[index] = -1;
+        }
+    };
+    for (int j = 0; j <= h; ++j)
+        for (int i = 0; i < w; ++i) edge(e.horizontal(i, j), i, j, 1, 0, j > 0 && j < h);
+    for (int j = 0; j < h; ++j)
+        for (int i = 0; i <= w; ++i) edge(e.vertical(i, j), i, j, 0, 1, i > 0 && i < w);
+    e.first.back() = int32_t(e.px.size());
+    for (int j = 0; j < h; ++j) {
+        for (int i = 0; i < w; ++i) {
+            if (e.refine[e.horizontal(i, j)] < 0 || e.refine[e.horizontal(i, j + 1)] < 0 ||
+                e.refine[e.vertical(i, j)] < 0 || e.refine[e.vertical(i + 1, j)] < 0)
+                ts.direct[size_t(j * w + i)] = 0;
+        }
+    }
 }
 
 // The pixels of one tile inside output cell `cell` (grid: its corners): direct where the
@@ -363,18 +478,19 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                  TileScratch& ts, int64_t cell, bool regular) {
     const Conversion& cv = job.cv;
     const Geometry& s = cv.src;
-    const bool straight = regular && grid.usable;
-    const bool maybe_near = straight && tile_maybe_near(job, grid, cell);
+    const bool usable = regular && grid.usable;
+    // Straight: every pixel edge's image within kChordTol of its chord (half of it as the
+    // grid estimates it) and no fold in reach; else each edge is refined (refine_tile_edges).
+    const bool straight = usable && grid.bend <= 0.5 * kChordTol && !tile_on_fold(cv, grid, cell);
     const int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
     const int64_t row0 = (grid.ref_cell / s.columns) * s.cell_height();
     const bool rows = !job.model.row_m.empty();
     const DirectPixel direct = direct_pixel_for(rows, sums.nch);
     ts.direct.assign(size_t(grid.w * grid.h), 0);
     const int64_t st = grid.w + 1;
-    if (straight && !maybe_near && whole_tile_direct(s, grid)) {
-        std::fill(ts.direct.begin(), ts.direct.end(), 1);
-    }
-    for (int j = 0; j < grid.h && straight && !ts.direct[0]; ++j) {
+    const bool all_direct = straight && whole_tile_direct(s, grid);
+    if (all_direct) std::fill(ts.direct.begin(), ts.direct.end(), 1);
+    for (int j = 0; j < grid.h && usable && !all_direct; ++j) {
         const double* x = grid.x.data() + j * st;
         const double* y = grid.y.data() + j * st;
         char* direct_row = ts.direct.data() + j * grid.w;
@@ -384,14 +500,9 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
             direct_row[i] = direct_quad(s, grid.ref_cell, xs, ys);
         }
     }
-    if (maybe_near) {
-        ts.dirs.resize(grid.exact.size());
-        for (size_t k = 0; k < grid.exact.size(); ++k) ts.dirs[k] = source_direction(s, grid.exact[k]);
-        for (int j = 0; j < grid.h; ++j)
-            for (int i = 0; i < grid.w; ++i)
-                if (ts.direct[size_t(j * grid.w + i)] && pixel_near(job, grid, ts.dirs, cell, i, j))
-                    ts.direct[size_t(j * grid.w + i)] = 0;
-    }
+    ts.curved = usable && !straight;
+    ts.edges.reset(grid.w, grid.h, sums.nch);
+    if (ts.curved) refine_tile_edges(job, grid, ts, cell);
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
     while (band_j0 < grid.h) {
@@ -420,19 +531,27 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                     } else {
                         std::fill(sums.acc, sums.acc + sums.nch, 0.0);
                         sums.weight = 0.0;
-                        double xs[4], ys[4];
-                        for (int q = 0; q < 4; ++q) {
-                            xs[q] = grid.x[k[q]];
-                            ys[q] = grid.y[k[q]];
-                        }
-                        direct(job.model, grid.ref_cell, row0, period, xs, ys, sums, sp.green);
+                        pixel_polygon(grid, ts, i, j, sp.xs, sp.ys);
+                        direct(job.model, grid.ref_cell, row0, period, sp.xs.data(), sp.ys.data(),
+                               int(sp.xs.size()), sums, sp.green);
                     }
                 } else {
                     std::fill(sums.acc, sums.acc + sums.nch, 0.0);
                     sums.weight = 0.0;
                     SourcePoint corners[4] = {grid.exact[k[0]], grid.exact[k[1]], grid.exact[k[2]], grid.exact[k[3]]};
+                    // The tile's decision for each side: chords in a straight tile.
+                    const EdgeMemo& em = ts.edges;
+                    int sides[4] = {0, 0, 0, 0};
+                    if (ts.curved) {
+                        sides[0] = em.refine[em.horizontal(i, j)];
+                        sides[1] = em.refine[em.vertical(i + 1, j)];
+                        sides[2] = em.refine[em.horizontal(i, j + 1)];
+                        sides[3] = em.refine[em.vertical(i, j)];
+                    } else if (!usable) {
+                        sides[0] = sides[1] = sides[2] = sides[3] = -1;
+                    }
                     slow_rect(sp, double(pi) * cv.scale_x, double(pj) * cv.scale_y,
-                              double(pi + 1) * cv.scale_x, double(pj + 1) * cv.scale_y, corners);
+                              double(pi + 1) * cv.scale_x, double(pj + 1) * cv.scale_y, corners, sides);
                 }
                 store_pixel(job.out, pi, pj, sums, pixel_coverage(cv, job.out, pi, pj));
             }

@@ -15,15 +15,12 @@
 
 namespace envconv {
 
-// The source directions where the source map is singular, and every direction near which
-// pixel edges need refining (area_slow.h): those and the output map's own singular directions.
+// The source directions where the source map is singular.
 struct Singular {
     int count = 0;
     int kind = 0;  // 1: lat-long poles (+Y, -Y); 2: a disk's -Z (sphere, angular)
     Vec3 src[2];   // in the source frame
     Vec3 out[2];   // in the output frame: rot^T src
-    int near_count = 0;
-    Vec3 near[16];  // in the source frame
 };
 
 inline Singular source_singular(const Conversion& cv) {
@@ -44,32 +41,9 @@ inline Singular source_singular(const Conversion& cv) {
         s.count = 1;
         s.src[0] = {0.0, 0.0, -1.0};
     }
-    for (int k = 0; k < s.count; ++k) {
-        s.out[k] = back(s.src[k]);
-        s.near[s.near_count++] = s.src[k];
-    }
-    // The output's own: a lat-long's poles, the -Z of a mirror ball or angular map.
-    if (cv.dst.family == kLatlong) {
-        s.near[s.near_count++] = r.apply({0.0, 1.0, 0.0});
-        s.near[s.near_count++] = r.apply({0.0, -1.0, 0.0});
-    } else if (cv.dst.family == kSphere || cv.dst.family == kAngular) {
-        s.near[s.near_count++] = r.apply({0.0, 0.0, -1.0});
-    }
-    // Where the folds of an octahedral or equal-area square meet (the octahedron's vertices:
-    // the axes of its frame), its map is kinked in every direction, as at a cone's tip.
-    const Vec3 axes[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    if (cv.dst.family == kOctahedral || cv.dst.family == kEqualArea)
-        for (const Vec3& a : axes) s.near[s.near_count++] = r.apply(a);
-    if (cv.src.family == kOctahedral || cv.src.family == kEqualArea)
-        for (const Vec3& a : axes)
-            if (s.near_count < 16) s.near[s.near_count++] = a;
+    for (int k = 0; k < s.count; ++k) s.out[k] = back(s.src[k]);
     return s;
 }
-
-// Pixel edges within this many times their own length of a singular direction are refined:
-// there the images of a pixel's opposite edges bend differently (near a pole, by 1/(8 r) of a
-// pixel at r pixels), and chords would misplace that difference of the pixel's solid angle.
-constexpr double kNearLengths = 16.0;
 
 // True when the line (a0, b0) -> (a1, b1) crosses or touches a fold of the octahedral and
 // equal-area squares (their axes, their edges, the diamond |a| + |b| = 1), where their maps
@@ -81,21 +55,11 @@ inline bool crosses_fold(double a0, double b0, double a1, double b1) {
     return (std::fabs(a0) + std::fabs(b0) - 1.0) * (std::fabs(a1) + std::fabs(b1) - 1.0) <= 0.0;
 }
 
-// True when a pixel edge needs refining beyond its chord: near a singular direction, or across
-// a fold of the output map (output points (ox0, oy0), (ox1, oy1) of cell `cell`) or of the
-// source map (source points s0, s1 in their own cells); directions d0, d1 in the source
-// frame. Depends on the edge alone, so both pixels that share it agree.
-inline bool edge_near(const Conversion& cv, const Singular& s, int64_t cell, double ox0,
-                      double oy0, double ox1, double oy1, const Vec3& d0, const Vec3& d1,
-                      const SourcePoint& s0, const SourcePoint& s1) {
-    double len = std::sqrt((d1.x - d0.x) * (d1.x - d0.x) + (d1.y - d0.y) * (d1.y - d0.y) +
-                           (d1.z - d0.z) * (d1.z - d0.z));
-    for (int k = 0; k < s.near_count; ++k) {
-        const Vec3& n = s.near[k];
-        double e0 = std::sqrt((d0.x - n.x) * (d0.x - n.x) + (d0.y - n.y) * (d0.y - n.y) + (d0.z - n.z) * (d0.z - n.z));
-        double e1 = std::sqrt((d1.x - n.x) * (d1.x - n.x) + (d1.y - n.y) * (d1.y - n.y) + (d1.z - n.z) * (d1.z - n.z));
-        if (std::min(e0, e1) <= kNearLengths * len) return true;
-    }
+// True when a pixel edge touches a fold of the output map (output points (ox0, oy0),
+// (ox1, oy1) of cell `cell`) or of the source map (source points s0, s1 in their own cells):
+// such edges are refined to a tighter tolerance (area_slow.h). Depends on the edge alone.
+inline bool edge_on_fold(const Conversion& cv, int64_t cell, double ox0, double oy0, double ox1,
+                         double oy1, const SourcePoint& s0, const SourcePoint& s1) {
     const Geometry &d = cv.dst, &g = cv.src;
     if (d.family == kOctahedral || d.family == kEqualArea) {
         double a0, b0, a1, b1;
@@ -148,6 +112,11 @@ inline Vec3 source_direction(const Geometry& src, const SourcePoint& p) {
     double a, b;
     cell_local(src, p.cell, p.x, p.y, a, b);
     return face_to_dir(src.family, src.cell_face[p.cell], a, b);
+}
+
+// The exact source point of output point (x, y) through output cell `cell`.
+inline SourcePoint exact_source(const Conversion& cv, int64_t cell, double x, double y) {
+    return source_of(cv.src, output_direction(cv, cell, x, y));
 }
 
 // Where the singular source point of singular direction k lies in `cell`'s coordinates, seen

@@ -23,7 +23,8 @@ struct PieceVertex {
     bool arc;       // the edge from this vertex to the next is an arc of the piece's circle
     bool mapped;    // src holds the vertex's source point
     bool seam;      // the edge from this vertex to the next is a cut along a source seam
-    bool refine;    // the edge from this vertex to the next is refined (area_map.h edge_near)
+    bool fold;      // the edge from this vertex to the next touches a fold (area_map.h)
+    bool chord;     // the edge from this vertex to the next stays a chord (its tile decided)
     bool boundary;  // the vertex lies on a source seam: it belongs to either side's cell
     int snapped;    // a source singular point (area_map.h) moved onto this vertex, or -1
     SourcePoint src;
@@ -38,7 +39,7 @@ struct Piece {
 };
 
 inline PieceVertex plain_vertex(double x, double y) {
-    return {x, y, false, false, false, true, false, -1, {0.0, 0.0, -1}};
+    return {x, y, false, false, false, false, false, false, -1, {0.0, 0.0, -1}};
 }
 
 // The disk of a disk cell in level-0 pixels: centre and the radius of unit (a, b) radius.
@@ -173,10 +174,7 @@ inline void clip_piece(const Piece& in, double nx, double ny, double c, bool kee
         bool inside = sgn * (nx * px + ny * py - c) <= 0.0;
         if (sgn * (nx * s.x + ny * s.y - c) <= tol && out.n < kPieceVertices) {
             PieceVertex v = s;
-            if (!inside) {  // s on the line, the edge leaves: a cut edge, inside the pixel
-                v.arc = v.seam = false;
-                v.refine = true;
-            }
+            if (!inside) v.arc = v.seam = v.fold = v.chord = false;  // on the line, leaving: a cut
             out.v[out.n++] = v;
         }
         for (int m = 0; m < count && out.n < kPieceVertices; ++m) {
@@ -184,10 +182,7 @@ inline void clip_piece(const Piece& in, double nx, double ny, double c, bool kee
             v.mapped = false;
             edge_point(in, k, ts[m], v.x, v.y);
             inside = !inside;  // every crossing changes sides
-            if (!inside) {     // leaving: the next edge runs along the cut, inside the pixel
-                v.arc = v.seam = false;
-                v.refine = true;
-            }
+            if (!inside) v.arc = v.seam = v.fold = v.chord = false;  // leaving: along the cut
             out.v[out.n++] = v;
         }
     }

@@ -145,6 +145,11 @@ struct EdgeMemo {
     int w = 0, h = 0;
     int64_t stride = 0;  // doubles per edge: 1 + channels (solid angle, colour)
     std::vector<double> hv, vv, pixel;
+    // A curved tile's edges as polylines: the refinement points of edge e (horizontal edges
+    // first, then vertical ones) are px, py [first[e], first[e + 1]).
+    std::vector<int32_t> first;
+    std::vector<double> px, py;
+    std::vector<signed char> refine;  // per edge: 1 refined, 0 chord, -1 not in the cell
     void reset(int w_, int h_, int64_t nch) {
         w = w_;
         h = h_;
@@ -153,6 +158,8 @@ struct EdgeMemo {
         vv.resize(size_t(h * (w + 1) * stride));
         pixel.resize(size_t(h * w * stride));
     }
+    size_t horizontal(int i, int j) const { return size_t(j * w + i); }
+    size_t vertical(int i, int j) const { return size_t((h + 1) * w + j * (w + 1) + i); }
 };
 
 }  // namespace envconv

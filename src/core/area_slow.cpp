@@ -96,39 +96,49 @@ void place_singular(const SlowPath& sp, Piece& p, bool closure[2]) {
     }
 }
 
-// Append the refinement points of edge k between parameters t0 and t1 (source points
-// (x0, y0), (x1, y1) in `cell`): its midpoint's image where it strays from the chord by more
-// than kChordTol + 2 kCornerTol output pixels across the edge, recursively. False when the edge
-// leaves the cell in between.
+// Whether the image of an output segment is straight: its midpoint's image (mx, my) strays
+// from the chord (x0, y0) -> (x1, y1) by at most tol output pixels across it (through
+// (qx, qy), the image of a step of h output pixels across the segment at its midpoint), and
+// is neither a loop nor a bulge (a chord of no length, or a midpoint further off than a
+// quarter of the chord: both ends at -Z, say).
+bool image_straight(double x0, double y0, double x1, double y1, double mx, double my, double qx,
+                    double qy, double h, double tol) {
+    double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1);
+    double chx = x1 - x0, chy = y1 - y0;
+    double off = std::fabs(chx * (my - cy) - chy * (mx - cx));  // |c x (M - C)|
+    double scale = std::fabs(chx * (qy - my) - chy * (qx - mx)) / h;  // |c x J n|
+    double chord2 = chx * chx + chy * chy;
+    bool near = chord2 > 0.0 ? off <= 0.25 * chord2 : (mx == cx && my == cy);
+    return near && off <= tol * scale;
+}
+
+// refine_segment, for the edges of pieces: straight edges through it (so that a pixel side
+// refines as it does in the direct path), arcs by their angle the same way.
 bool refine_edge(SlowPath& sp, const Piece& p, int k, int64_t cell, double t0, double x0,
                  double y0, double t1, double x1, double y1, int depth) {
+    if (p.v[k].chord) return true;
+    const double tol = p.v[k].fold ? 0.25 * kChordTol : kChordTol;
+    if (!p.v[k].arc) {
+        double ox0, oy0, ox1, oy1;
+        edge_point(p, k, t0, ox0, oy0);
+        edge_point(p, k, t1, ox1, oy1);
+        return refine_segment(sp.cv, sp.sing, p.cell, ox0, oy0, ox1, oy1, cell, x0, y0, x1, y1, tol,
+                              sp.xs, sp.ys, depth);
+    }
     if (depth >= kMaxRefine) return true;
     double tm = 0.5 * (t0 + t1), ox, oy;
     edge_point(p, k, tm, ox, oy);
     Vec3 d = output_direction(sp.cv, p.cell, ox, oy);
     if (on_singular(sp.sing, d) >= 0) return true;
     if (source_of(sp.cv.src, d).cell != cell) return false;
-    double cx = 0.5 * (x0 + x1), cy = 0.5 * (y0 + y1), mx, my;
-    if (!continued_point(sp.cv.src, cell, d, cx, cy, mx, my)) return false;
-    // The midpoint's offset across the chord, in output pixels: |c x (M - C)| / |c x J n|
-    // with c the chord and J n the image of a unit step across the edge (output pixels) at
-    // its midpoint; the step's component along the chord does not move the outline.
+    double mx, my;
+    if (!continued_point(sp.cv.src, cell, d, 0.5 * (x0 + x1), 0.5 * (y0 + y1), mx, my)) return false;
     const double h = 1e-3;
-    double ex, ey;
-    edge_point(p, k, std::min(1.0, tm + 1e-3), ex, ey);
-    double tx = ex - ox, ty = ey - oy, len = std::hypot(tx, ty);
-    double nx = len > 0.0 ? -ty / len : 0.0, ny = len > 0.0 ? tx / len : 1.0;
-    double qx, qy;
-    Vec3 dq = output_direction(sp.cv, p.cell, ox + h * nx, oy + h * ny);
+    double r = std::hypot(ox - p.cx, oy - p.cy), qx, qy;  // across an arc: along its radius
+    double nx = r > 0.0 ? (ox - p.cx) / r : 1.0, ny = r > 0.0 ? (oy - p.cy) / r : 0.0;
+    Vec3 dq = output_direction(sp.cv, p.cell, ox - h * nx, oy - h * ny);
     if (!continued_point(sp.cv.src, cell, dq, mx, my, qx, qy)) return false;
-    double chx = x1 - x0, chy = y1 - y0;
-    double off = std::fabs(chx * (my - cy) - chy * (mx - cx));
-    double scale = std::fabs(chx * (qy - my) - chy * (qx - mx)) / h;
-    // Straight: within the tolerance, and not a loop or a bulge (a chord of no length, or a
-    // midpoint further off than a quarter of the chord: both ends at -Z, say).
-    double chord2 = chx * chx + chy * chy;
-    bool near = chord2 > 0.0 ? off <= 0.25 * chord2 : (mx == cx && my == cy);
-    if (near && off <= kChordTol * scale) return true;
+    if (image_straight(x0, y0, x1, y1, mx, my, qx, qy, h, tol)) return true;
     if (!refine_edge(sp, p, k, cell, t0, x0, y0, tm, mx, my, depth + 1)) return false;
     sp.xs.push_back(mx);
     sp.ys.push_back(my);
@@ -227,7 +237,7 @@ int append_singular_run(SlowPath& sp, const Piece& p, const VertexFacts& f, int 
     }
     double ix, iy, ox, oy;
     if (!singular_limit(sp, p, k, true, cell, f.singular[first], x, y, ix, iy)) return -1;
-    if (p.v[k].refine && !p.v[k].seam && !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, ix, iy, 0)) return -1;
+    if (!p.v[k].seam && !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, ix, iy, 0)) return -1;
     sp.xs.push_back(ix);
     sp.ys.push_back(iy);
     double qx, qy;
@@ -239,7 +249,7 @@ int append_singular_run(SlowPath& sp, const Piece& p, const VertexFacts& f, int 
     int after = (m + 1) % n;
     double nx, ny;
     if (!vertex_image(sp, p, f, after, cell, ox, oy, nx, ny)) return -1;
-    if (p.v[m].refine && !p.v[m].seam && !refine_edge(sp, p, m, cell, 0.0, ox, oy, 1.0, nx, ny, 0)) return -1;
+    if (!p.v[m].seam && !refine_edge(sp, p, m, cell, 0.0, ox, oy, 1.0, nx, ny, 0)) return -1;
     return after;
 }
 
@@ -271,7 +281,7 @@ bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t
         } else {
             double nx, ny;
             if (!vertex_image(sp, p, f, next, cell, x, y, nx, ny)) return false;
-            if (p.v[k].refine && !p.v[k].seam && !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0))
+            if (!p.v[k].seam && !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0))
                 return false;
             k = next;
         }
@@ -427,41 +437,41 @@ void process_piece(SlowPath& sp, Piece& p, int depth) {
 // `corners` (the pixel's own corners, in the order (x0, y0), (x1, y0), (x1, y1), (x0, y1))
 // where they are the pixel's.
 // Whether each side of the output rectangle [x0, x1] x [y0, y1] of `cell` (from corner k, in
-// the order (x0, y0), (x1, y0), (x1, y1), (x0, y1), to corner k + 1) is refined: edge_near of
-// its corners' points (`corners` when given, else mapped exactly).
-void near_sides(const SlowPath& sp, int64_t cell, double x0, double y0, double x1, double y1,
-                const SourcePoint* corners, bool near[4]) {
+// the order (x0, y0), (x1, y0), (x1, y1), (x0, y1), to corner k + 1) touches a fold:
+// edge_on_fold of its corners' points (`corners` when given, else mapped exactly).
+void fold_sides(const SlowPath& sp, int64_t cell, double x0, double y0, double x1, double y1,
+                const SourcePoint* corners, bool fold[4]) {
+    const Geometry &d = sp.cv.dst, &g = sp.cv.src;
+    const bool folds = d.family == kOctahedral || d.family == kEqualArea ||
+                       g.family == kOctahedral || g.family == kEqualArea;
     const double xs[4] = {x0, x1, x1, x0}, ys[4] = {y0, y0, y1, y1};
-    Vec3 d[4];
     SourcePoint p[4];
     for (int k = 0; k < 4; ++k) {
-        if (corners) {
-            p[k] = corners[k];
-            d[k] = source_direction(sp.cv.src, p[k]);
-        } else {
-            d[k] = output_direction(sp.cv, cell, xs[k], ys[k]);
-            p[k] = source_of(sp.cv.src, d[k]);
-        }
+        fold[k] = false;
+        if (folds) p[k] = corners ? corners[k] : exact_source(sp.cv, cell, xs[k], ys[k]);
     }
-    for (int k = 0; k < 4; ++k) {
+    for (int k = 0; folds && k < 4; ++k) {
         int l = (k + 1) % 4;
-        near[k] = edge_near(sp.cv, sp.sing, cell, xs[k], ys[k], xs[l], ys[l], d[k], d[l], p[k], p[l]);
+        fold[k] = edge_on_fold(sp.cv, cell, xs[k], ys[k], xs[l], ys[l], p[k], p[l]);
     }
 }
 
 // Mark each straight edge of the piece that runs along a side of the rectangle [x0, x1] x
-// [y0, y1] with that side's flag; other edges (arcs, cuts) are refined.
-void mark_sides(Piece& p, double x0, double y0, double x1, double y1, const bool near[4]) {
+// [y0, y1] with that side's fold flag, and as a chord where its tile decided so (`sides`);
+// other edges (arcs, cuts) are left as they are.
+void mark_sides(Piece& p, double x0, double y0, double x1, double y1, const bool fold[4],
+                const int* sides = nullptr) {
     for (int k = 0; k < p.n; ++k) {
         PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
+        if (s.arc) continue;
         int side = -1;
-        if (!s.arc) {
-            if (s.y == y0 && e.y == y0) side = 0;
-            else if (s.x == x1 && e.x == x1) side = 1;
-            else if (s.y == y1 && e.y == y1) side = 2;
-            else if (s.x == x0 && e.x == x0) side = 3;
-        }
-        s.refine = side < 0 || near[side];
+        if (s.y == y0 && e.y == y0) side = 0;
+        else if (s.x == x1 && e.x == x1) side = 1;
+        else if (s.y == y1 && e.y == y1) side = 2;
+        else if (s.x == x0 && e.x == x0) side = 3;
+        if (side < 0) continue;
+        s.fold = fold[side];
+        s.chord = sides && sides[side] == 0;
     }
 }
 
@@ -504,9 +514,9 @@ void disk_pieces(SlowPath& sp, int64_t cell, double x0, double y0, double x1, do
         clip_square_to_circle(x0, y0, x1, y1, cx, cy, p.r, p);
     }
     if (p.n > 0) {
-        bool near[4];
-        near_sides(sp, cell, x0, y0, x1, y1, nullptr, near);
-        mark_sides(p, x0, y0, x1, y1, near);
+        bool fold[4];
+        fold_sides(sp, cell, x0, y0, x1, y1, nullptr, fold);
+        mark_sides(p, x0, y0, x1, y1, fold);
         process_piece(sp, p, 0);
     }
     if (!singular_rim || (d.guard == 0 && !sp.cv.fill)) return;
@@ -522,8 +532,31 @@ void disk_pieces(SlowPath& sp, int64_t cell, double x0, double y0, double x1, do
 
 }  // namespace
 
+bool refine_segment(const Conversion& cv, const Singular& sing, int64_t ocell, double ox0,
+                    double oy0, double ox1, double oy1, int64_t cell, double x0, double y0,
+                    double x1, double y1, double tol, std::vector<double>& xs,
+                    std::vector<double>& ys, int depth) {
+    if (depth >= kMaxRefine) return true;
+    const double ox = 0.5 * (ox0 + ox1), oy = 0.5 * (oy0 + oy1), h = 1e-3;
+    Vec3 d = output_direction(cv, ocell, ox, oy);
+    if (on_singular(sing, d) >= 0) return true;
+    if (source_of(cv.src, d).cell != cell) return false;
+    double mx, my, qx, qy;
+    if (!continued_point(cv.src, cell, d, 0.5 * (x0 + x1), 0.5 * (y0 + y1), mx, my)) return false;
+    double len = std::hypot(ox1 - ox0, oy1 - oy0);
+    double nx = len > 0.0 ? -(oy1 - oy0) / len : 0.0, ny = len > 0.0 ? (ox1 - ox0) / len : 1.0;
+    Vec3 dq = output_direction(cv, ocell, ox + h * nx, oy + h * ny);
+    if (!continued_point(cv.src, cell, dq, mx, my, qx, qy)) return false;
+    if (image_straight(x0, y0, x1, y1, mx, my, qx, qy, h, tol)) return true;
+    if (!refine_segment(cv, sing, ocell, ox0, oy0, ox, oy, cell, x0, y0, mx, my, tol, xs, ys, depth + 1))
+        return false;
+    xs.push_back(mx);
+    ys.push_back(my);
+    return refine_segment(cv, sing, ocell, ox, oy, ox1, oy1, cell, mx, my, x1, y1, tol, xs, ys, depth + 1);
+}
+
 void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
-               const SourcePoint* corners) {
+               const SourcePoint* corners, const int* sides) {
     const Geometry& d = sp.cv.dst;
     const double cw = double(d.cell_width()), ch = double(d.cell_height());
     const double pixel[4] = {x0, y0, x1, y1};
@@ -547,10 +580,10 @@ void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
                 disk_pieces(sp, cell, ax, ay, bx, by);
             } else {
                 Piece p = rect_piece(cell, ax, ay, bx, by, corners, pixel);
-                bool near[4];
+                bool fold[4];
                 const bool whole = ax == x0 && ay == y0 && bx == x1 && by == y1;
-                near_sides(sp, cell, ax, ay, bx, by, whole ? corners : nullptr, near);
-                mark_sides(p, ax, ay, bx, by, near);
+                fold_sides(sp, cell, ax, ay, bx, by, whole ? corners : nullptr, fold);
+                mark_sides(p, ax, ay, bx, by, fold, whole ? sides : nullptr);
                 process_piece(sp, p, 0);
             }
         }

@@ -23,14 +23,15 @@
 
 namespace envconv {
 
-// Pixel edges near a singular direction or across a fold (area_map.h edge_near) are refined
-// until their images stray less than kChordTol from their chords, and an interpolated corner
-// may be kCornerTol from its exact image (area_tiles.h); both in output pixels: how far the
-// footprint's outline is off, as a share of the pixel it bounds (the share of its solid angle
-// misplaced). Other pixel edges are chords: their images bend, but a pixel's opposite edges
-// bend alike, so that what one takes from the pixel the other gives back. Both depend on the
-// edge alone, so the two pixels that share an edge agree on it.
-constexpr double kChordTol = 1e-3;
+// A pixel edge whose image strays more than kChordTol from its chord (at its midpoint, in
+// output pixels across the edge: the share of the pixel's solid angle the chord would
+// misplace) is refined: its midpoint's image is inserted and both halves are tested again. An
+// edge that touches a fold of the octahedral and equal-area squares is held to a quarter of
+// that (a fold through a pixel's corners leaves two edges on each side, bending in mirrored
+// ways, whose chords' errors add up rather than cancel). The test depends on the edge alone,
+// so the two pixels that share an edge agree on it. Interpolated corners may be kCornerTol
+// from their exact images (area_tiles.h), in output pixels too.
+constexpr double kChordTol = 2e-3;
 constexpr double kCornerTol = 1e-3;
 constexpr int kMaxRefine = 16;       // halvings of an edge
 constexpr int kMaxPieceDepth = 8;    // splits of a piece
@@ -149,11 +150,22 @@ inline bool vertex_image(const SlowPath& sp, const Piece& p, const VertexFacts& 
     return continued_point(g, cell, f.dir[k], ref_x, ref_y, x, y);
 }
 
+// Append to xs, ys the refinement points of the straight output segment (ox0, oy0) ->
+// (ox1, oy1) of output cell `ocell`, whose images in source cell `cell` are (x0, y0) and
+// (x1, y1): the image of its midpoint where it strays more than tol (output pixels) from the
+// chord, and recursively. False when the segment leaves the cell in between.
+bool refine_segment(const Conversion& cv, const Singular& sing, int64_t ocell, double ox0,
+                    double oy0, double ox1, double oy1, int64_t cell, double x0, double y0,
+                    double x1, double y1, double tol, std::vector<double>& xs,
+                    std::vector<double>& ys, int depth = 0);
+
 // Integrate the output rectangle [x0, x1] x [y0, y1] (level-0 output pixels: a pixel, or a
 // sub-pixel) into *sp.sums: its piece in every output cell it meets, through that cell's map.
 // `corners`, when not null, are the source points of the rectangle's corners (x0, y0),
-// (x1, y0), (x1, y1), (x0, y1), as the pixels around it use them.
+// (x1, y0), (x1, y1), (x0, y1), as the pixels around it use them; `sides`, when not null, the
+// decision its tile made for each side (from corner k to k + 1): 0 a chord, else refined by
+// refine_segment's rule.
 void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
-               const SourcePoint* corners);
+               const SourcePoint* corners, const int* sides = nullptr);
 
 }  // namespace envconv

@@ -256,8 +256,14 @@ inline void map_grid(const Conversion& cv, int64_t cell, int64_t i0, int64_t j0,
     g.ref_cell = first.cell;
     g.x[0] = first.x;
     g.y[0] = first.y;
-    g.usable = line_to_reference(cv, g, 0, 0, 1, 0, w) && line_to_reference(cv, g, w, 0, 0, 1, h) &&
-               line_to_reference(cv, g, 0, 0, 0, 1, h) && line_to_reference(cv, g, 0, h, 1, 0, w) &&
+    // The boundary is expressed along its four sides; the far corner, reached both ways, must
+    // come out the same, or the boundary winds around a singular point (a lat-long pole): no
+    // direct path for such a tile.
+    g.usable = line_to_reference(cv, g, 0, 0, 1, 0, w) && line_to_reference(cv, g, w, 0, 0, 1, h);
+    const double far_x = g.x[g.at(w, h)], far_y = g.y[g.at(w, h)];
+    g.usable = g.usable && line_to_reference(cv, g, 0, 0, 0, 1, h) &&
+               line_to_reference(cv, g, 0, h, 1, 0, w) &&
+               std::hypot(g.x[g.at(w, h)] - far_x, g.y[g.at(w, h)] - far_y) < 1e-6 * (1.0 + std::fabs(far_x)) &&
                fill_grid(cv, cell, g, 0, 0, w, h, tol);
     if (!g.usable) {  // every corner exact, for the general path
         for (int j = 1; j < h; ++j)
