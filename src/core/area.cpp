@@ -8,7 +8,7 @@
 // handed out exactly once, to the pixels that cover it: a one-texel sun keeps its energy in
 // any conversion, a constant map stays constant, and nothing aliases.
 //
-// Work is split into bands of kTile output rows, as the point kernel's is.
+// Work is split into bands of kAreaTile output rows, each band into tiles (area_tiles.h).
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -26,8 +26,10 @@ namespace {
 
 std::atomic<bool> direct_allowed{true};
 
-// Tiles are kAreaTileWidth x kTile pixels (bands of kTile rows, as the point kernel's).
-constexpr int64_t kAreaTileWidth = 32;
+// Tiles are kAreaTile x kAreaTile pixels, in bands of kAreaTile rows (progress still counts
+// bands of kTile rows, the unit the Python side expects).
+constexpr int64_t kAreaTile = 32;
+static_assert(kAreaTile % kTile == 0, "progress counts whole bands of kTile rows");
 
 struct AreaJob {
     const Conversion& cv;
@@ -186,6 +188,7 @@ struct TileScratch {
     std::vector<char> direct;  // per pixel of the tile: integrate directly
     bool curved = false;       // the tile's edges are polylines (EdgeMemo::first, px, py)
     std::vector<SourcePoint> column;  // exact points of the last tile's right column
+    SidePath sides[4];                // how the tile took a general-path pixel's sides
 
     PrefixTable table;
     EdgeMemo edges;
@@ -355,6 +358,36 @@ bool whole_tile_direct(const Geometry& g, const CornerGrid& grid) {
     return xmin > x0 + margin && xmax < x0 + w - margin;
 }
 
+// How the tile took the sides of pixel (i, j) (for the general path, in the order (i, j) ->
+// (i + 1, j) -> (i + 1, j + 1) -> (i, j + 1)): chords in a straight tile, its polylines in a
+// curved one, the general path's own rule where the tile has no usable grid.
+void side_paths(const CornerGrid& g, TileScratch& ts, int i, int j, bool usable) {
+    const EdgeMemo& e = ts.edges;
+    const size_t index[4] = {e.horizontal(i, j), e.vertical(i + 1, j), e.horizontal(i, j + 1), e.vertical(i, j)};
+    const size_t start[4] = {g.at(i, j), g.at(i + 1, j), g.at(i + 1, j + 1), g.at(i, j + 1)};
+    for (int k = 0; k < 4; ++k) {
+        SidePath& s = ts.sides[k];
+        s.px.clear();
+        s.py.clear();
+        s.mode = usable ? 0 : 1;
+        if (!usable || !ts.curved || e.refine[index[k]] == 0) continue;
+        if (e.refine[index[k]] < 0) {
+            s.mode = 1;
+            continue;
+        }
+        s.mode = 2;
+        s.cell = g.ref_cell;
+        s.x0 = g.x[start[k]];
+        s.y0 = g.y[start[k]];
+        int32_t a = e.first[index[k]], b = e.first[index[k] + 1];
+        for (int32_t m = 0; m < b - a; ++m) {
+            int32_t q = k >= 2 ? b - 1 - m : a + m;  // the bottom and left sides run backwards
+            s.px.push_back(e.px[size_t(q)]);
+            s.py.push_back(e.py[size_t(q)]);
+        }
+    }
+}
+
 // The footprint of pixel (i, j) of the grid into xs, ys: its corners and, in a curved tile,
 // the refinement points of its edges, around the pixel (i, j) -> (i + 1, j) -> (i + 1, j + 1)
 // -> (i, j + 1).
@@ -400,36 +433,61 @@ bool tile_on_fold(const Conversion& cv, const CornerGrid& g, int64_t cell) {
     return lo <= 1.0 && 1.0 <= hi;
 }
 
-// How far (output pixels across) the image of the grid's inside edge from corner (i, j) to
+// How far (output pixels across) the image of the grid's edge from corner (i, j) to
 // (i + di, j + dj) strays from its chord, as the grid estimates it: the second differences
-// along its line at its two ends, across the line, over the spacing of the lines on either
-// side, over eight. -1 (no estimate) at the ends of a line, or where the two ends' second
-// differences disagree by more than a quarter of kChordTol (the bend changes along the edge,
-// as near a pole, where an estimate would not hold).
-double edge_bend(const CornerGrid& g, int i, int j, int di, int dj) {
+// along its line at its two ends (the one inside the line at its ends, doubled to stay on the
+// safe side), across the line, over the spacing of the lines beside it, over eight; (dx, dy)
+// their mean, in texels. -1 (no estimate) where the two ends' second differences disagree by
+// more than a quarter of kChordTol: the bend changes along the edge (as near a pole), and an
+// estimate would not hold. The terms along the line use its own corners only, which the tile
+// beyond a boundary line shares, so both tiles estimate a boundary edge alike (up to the
+// spacing beside it, which decides only how an edge is taken, not where its points go).
+double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx, double& dy) {
     const double *x = g.x.data(), *y = g.y.data();
-    const int n = di ? g.w : g.h, at = di ? i : j;  // position along the line
-    if (at < 1 || at + 2 > n) return -1.0;
+    const int n = di ? g.w : g.h, at = di ? i : j;        // position along the line
+    const int m = di ? g.h : g.w, line = di ? j : i;      // which line across
     const int64_t step = di ? 1 : g.w + 1, across = di ? g.w + 1 : 1;
     const int64_t k0 = int64_t(g.at(i, j)), k1 = k0 + step;
-    double ax = x[k0 - step] - 2.0 * x[k0] + x[k1], ay = y[k0 - step] - 2.0 * y[k0] + y[k1];
-    double bx = x[k0] - 2.0 * x[k1] + x[k1 + step], by = y[k0] - 2.0 * y[k1] + y[k1 + step];
+    const int64_t lo = line > 0 ? k0 - across : k0, hi = line < m ? k0 + across : k0;
+    const double lines = double(hi - lo) / double(across);
     double tx = x[k1] - x[k0], ty = y[k1] - y[k0];
-    double sx = 0.5 * (x[k0 + across] - x[k0 - across]), sy = 0.5 * (y[k0 + across] - y[k0 - across]);
+    double sx = (x[hi] - x[lo]) / lines, sy = (y[hi] - y[lo]) / lines;
     double spacing = std::fabs(tx * sy - ty * sx);
+    dx = dy = 0.0;
     if (!(spacing > 0.0)) return -1.0;
-    double bend_a = std::fabs(tx * ay - ty * ax) / spacing / 8.0;
-    double bend_b = std::fabs(tx * by - ty * bx) / spacing / 8.0;
-    if (std::fabs(bend_a - bend_b) > 0.25 * kChordTol) return -1.0;
-    return 0.5 * (bend_a + bend_b);
+    double bends[2], vx[2], vy[2];
+    int count = 0;
+    if (at >= 1) {
+        vx[count] = x[k0 - step] - 2.0 * x[k0] + x[k1];
+        vy[count] = y[k0 - step] - 2.0 * y[k0] + y[k1];
+        ++count;
+    }
+    if (at + 2 <= n) {
+        vx[count] = x[k0] - 2.0 * x[k1] + x[k1 + step];
+        vy[count] = y[k0] - 2.0 * y[k1] + y[k1 + step];
+        ++count;
+    }
+    if (count == 0) return -1.0;
+    for (int c = 0; c < count; ++c) {
+        bends[c] = std::fabs(tx * vy[c] - ty * vx[c]) / spacing / 8.0;
+        dx += vx[c] / count;
+        dy += vy[c] / count;
+    }
+    if (count == 1) return 2.0 * bends[0];
+    if (std::fabs(bends[0] - bends[1]) > 0.25 * kChordTol) return -1.0;
+    return 0.5 * (bends[0] + bends[1]);
 }
 
+// An edge estimated to bend up to this many times kChordTol is taken as the parabola the grid
+// implies (its points at a quarter, a half and three quarters: sixteen times straighter).
+constexpr double kParabolaBend = 16.0;
+
 // Decide every edge of a curved tile, once for the pixels on both sides: a chord where the
-// grid's estimate of its bend is within kChordTol (inside edges away from folds), else the
-// polyline of refine_segment (in the reference cell), exact on the tile's boundary so that the
-// next tile decides the same. ts.edges.refine records the decision for the general path (1:
-// refined, 0: chord, -1: could not be refined in the reference cell, whose pixels are then not
-// direct).
+// grid's estimate of its bend is within half of kChordTol (away from folds), the estimated
+// parabola where it is within kParabolaBend times kChordTol, else the polyline of
+// refine_segment (in the reference cell). ts.edges.refine records what was done (0: chord,
+// 1: refined, 2: parabola, -1: could not be refined in the reference cell, whose pixels are
+// then not direct); the general path takes the same polylines (SidePath).
 void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t cell) {
     const Conversion& cv = job.cv;
     EdgeMemo& e = ts.edges;
@@ -439,15 +497,24 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
     e.refine.assign(edges, 0);
     e.px.clear();
     e.py.clear();
-    auto edge = [&](size_t index, int i0, int j0, int di, int dj, bool inside) {
+    auto edge = [&](size_t index, int i0, int j0, int di, int dj) {
         e.first[index] = int32_t(e.px.size());
         size_t a = g.at(i0, j0), b = g.at(i0 + di, j0 + dj);
         double ox0 = double(g.i0 + i0) * cv.scale_x, oy0 = double(g.j0 + j0) * cv.scale_y;
         double ox1 = double(g.i0 + i0 + di) * cv.scale_x, oy1 = double(g.j0 + j0 + dj) * cv.scale_y;
         bool fold = edge_on_fold(cv, cell, ox0, oy0, ox1, oy1, g.exact[a], g.exact[b]);
-        if (!fold && inside) {
-            double bend = edge_bend(g, i0, j0, di, dj);
+        if (!fold) {
+            double dx, dy, bend = edge_curve(g, i0, j0, di, dj, dx, dy);
             if (bend >= 0.0 && bend <= 0.5 * kChordTol) return;
+            if (bend >= 0.0 && bend <= kParabolaBend * kChordTol) {
+                // P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second difference.
+                for (double t : {0.25, 0.5, 0.75}) {
+                    e.px.push_back(g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * dx);
+                    e.py.push_back(g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * dy);
+                }
+                e.refine[index] = 2;
+                return;
+            }
         }
         e.refine[index] = 1;
         if (!refine_segment(cv, job.sing, cell, ox0, oy0, ox1, oy1, g.ref_cell, g.x[a], g.y[a], g.x[b],
@@ -458,9 +525,9 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
         }
     };
     for (int j = 0; j <= h; ++j)
-        for (int i = 0; i < w; ++i) edge(e.horizontal(i, j), i, j, 1, 0, j > 0 && j < h);
+        for (int i = 0; i < w; ++i) edge(e.horizontal(i, j), i, j, 1, 0);
     for (int j = 0; j < h; ++j)
-        for (int i = 0; i <= w; ++i) edge(e.vertical(i, j), i, j, 0, 1, i > 0 && i < w);
+        for (int i = 0; i <= w; ++i) edge(e.vertical(i, j), i, j, 0, 1);
     e.first.back() = int32_t(e.px.size());
     for (int j = 0; j < h; ++j) {
         for (int i = 0; i < w; ++i) {
@@ -539,19 +606,10 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                     std::fill(sums.acc, sums.acc + sums.nch, 0.0);
                     sums.weight = 0.0;
                     SourcePoint corners[4] = {grid.exact[k[0]], grid.exact[k[1]], grid.exact[k[2]], grid.exact[k[3]]};
-                    // The tile's decision for each side: chords in a straight tile.
-                    const EdgeMemo& em = ts.edges;
-                    int sides[4] = {0, 0, 0, 0};
-                    if (ts.curved) {
-                        sides[0] = em.refine[em.horizontal(i, j)];
-                        sides[1] = em.refine[em.vertical(i + 1, j)];
-                        sides[2] = em.refine[em.horizontal(i, j + 1)];
-                        sides[3] = em.refine[em.vertical(i, j)];
-                    } else if (!usable) {
-                        sides[0] = sides[1] = sides[2] = sides[3] = -1;
-                    }
+                    side_paths(grid, ts, i, j, usable);
                     slow_rect(sp, double(pi) * cv.scale_x, double(pj) * cv.scale_y,
-                              double(pi + 1) * cv.scale_x, double(pj + 1) * cv.scale_y, corners, sides);
+                              double(pi + 1) * cv.scale_x, double(pj + 1) * cv.scale_y, corners,
+                              ts.sides);
                 }
                 store_pixel(job.out, pi, pj, sums, pixel_coverage(cv, job.out, pi, pj));
             }
@@ -575,19 +633,19 @@ bool inside_disk(const Geometry& d, int64_t cell, double x0, double y0, double x
     return fx * fx + fy * fy <= unit * unit;
 }
 
-// One band of kTile output rows: tiles of up to kTile x kTile pixels, cut at output cell
+// One band of kAreaTile output rows: tiles of up to kAreaTile x kAreaTile pixels, cut at output cell
 // edges; tiles in one cell go through tile_pixels, pixels across cell edges one by one.
 void area_band(const AreaJob& job, int64_t band, SlowPath& sp, PixelSums& sums, CornerGrid& grid,
                TileScratch& ts) {
     const Conversion& cv = job.cv;
     const Geometry& d = cv.dst;
     const ResampleOutput& out = job.out;
-    int64_t j0 = band * kTile, j1 = std::min(j0 + kTile, out.height);
+    int64_t j0 = band * kAreaTile, j1 = std::min(j0 + kAreaTile, out.height);
     // The right column of the last tile mapped, for the next tile of the same cell.
     std::vector<SourcePoint>& shared = ts.column;
     int64_t shared_cell = -1, shared_i = -1;
-    for (int64_t i0 = 0; i0 < out.width; i0 += kAreaTileWidth) {
-        int64_t i1 = std::min(i0 + kAreaTileWidth, out.width);
+    for (int64_t i0 = 0; i0 < out.width; i0 += kAreaTile) {
+        int64_t i1 = std::min(i0 + kAreaTile, out.width);
         double x0 = double(i0) * cv.scale_x, y0 = double(j0) * cv.scale_y;
         double x1 = double(i1) * cv.scale_x, y1 = double(j1) * cv.scale_y;
         if (!cv.fill && out.zeroed && tile_in_empty_cell(d, x0, y0, x1, y1)) continue;
@@ -621,7 +679,7 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
     SourceModel model(src, cv.src);
     Singular sing = source_singular(cv);
     AreaJob job{cv, model, sing, out, samples};
-    int64_t bands = (out.height + kTile - 1) / kTile;
+    int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;
     parallel_for(bands, threads, [&](int64_t band) {
         SlowPath sp(cv, model, sing);
         std::vector<double> acc(size_t(out.channels));
@@ -630,7 +688,8 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
         CornerGrid grid;
         TileScratch ts;
         area_band(job, band, sp, sums, grid, ts);
-        if (progress) __atomic_add_fetch(progress, 1, __ATOMIC_RELAXED);
+        int64_t rows = std::min(kAreaTile, out.height - band * kAreaTile);
+        if (progress) __atomic_add_fetch(progress, (rows + kTile - 1) / kTile, __ATOMIC_RELAXED);
     });
 }
 

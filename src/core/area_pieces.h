@@ -25,6 +25,7 @@ struct PieceVertex {
     bool seam;      // the edge from this vertex to the next is a cut along a source seam
     bool fold;      // the edge from this vertex to the next touches a fold (area_map.h)
     bool chord;     // the edge from this vertex to the next stays a chord (its tile decided)
+    int side;       // the pixel side (0 ... 3) the edge from this vertex runs along, or -1
     bool boundary;  // the vertex lies on a source seam: it belongs to either side's cell
     int snapped;    // a source singular point (area_map.h) moved onto this vertex, or -1
     SourcePoint src;
@@ -39,7 +40,7 @@ struct Piece {
 };
 
 inline PieceVertex plain_vertex(double x, double y) {
-    return {x, y, false, false, false, false, false, false, -1, {0.0, 0.0, -1}};
+    return {x, y, false, false, false, false, false, -1, false, -1, {0.0, 0.0, -1}};
 }
 
 // The disk of a disk cell in level-0 pixels: centre and the radius of unit (a, b) radius.
@@ -174,7 +175,10 @@ inline void clip_piece(const Piece& in, double nx, double ny, double c, bool kee
         bool inside = sgn * (nx * px + ny * py - c) <= 0.0;
         if (sgn * (nx * s.x + ny * s.y - c) <= tol && out.n < kPieceVertices) {
             PieceVertex v = s;
-            if (!inside) v.arc = v.seam = v.fold = v.chord = false;  // on the line, leaving: a cut
+            if (!inside) {  // on the line, leaving: a cut
+                v.arc = v.seam = v.fold = v.chord = false;
+                v.side = -1;
+            }
             out.v[out.n++] = v;
         }
         for (int m = 0; m < count && out.n < kPieceVertices; ++m) {
@@ -182,7 +186,10 @@ inline void clip_piece(const Piece& in, double nx, double ny, double c, bool kee
             v.mapped = false;
             edge_point(in, k, ts[m], v.x, v.y);
             inside = !inside;  // every crossing changes sides
-            if (!inside) v.arc = v.seam = v.fold = v.chord = false;  // leaving: along the cut
+            if (!inside) {  // leaving: along the cut
+                v.arc = v.seam = v.fold = v.chord = false;
+                v.side = -1;
+            }
             out.v[out.n++] = v;
         }
     }

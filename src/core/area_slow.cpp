@@ -253,6 +253,34 @@ int append_singular_run(SlowPath& sp, const Piece& p, const VertexFacts& f, int 
     return after;
 }
 
+// Append the points of the tile's polyline for edge k of the piece when the edge is a whole
+// side of the pixel that its tile took as a polyline (SidePath mode 2), in `cell`'s
+// coordinates (the image of the side's start there is (x, y)); false otherwise.
+bool side_path(SlowPath& sp, const Piece& p, int k, int64_t cell, double x, double y) {
+    const int side = p.v[k].side;
+    if (side < 0 || !sp.sides || sp.sides[side].mode != 2) return false;
+    const PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
+    if (s.x != sp.side_x[side][0] || s.y != sp.side_y[side][0] || e.x != sp.side_x[side][1] ||
+        e.y != sp.side_y[side][1])
+        return false;  // a part of the side only
+    const SidePath& path = sp.sides[side];
+    const Geometry& g = sp.cv.src;
+    const bool shift = path.cell == cell && g.family != kOctahedral && g.family != kEqualArea;
+    double rx = x, ry = y;
+    for (size_t m = 0; m < path.px.size(); ++m) {
+        double px = path.px[m] + (shift ? x - path.x0 : 0.0), py = path.py[m] + (shift ? y - path.y0 : 0.0);
+        if (!shift) {
+            Vec3 d = source_direction(g, SourcePoint{path.px[m], path.py[m], path.cell});
+            if (!continued_point(g, cell, d, rx, ry, px, py)) return false;
+        }
+        sp.xs.push_back(px);
+        sp.ys.push_back(py);
+        rx = px;
+        ry = py;
+    }
+    return true;
+}
+
 // The footprint of the piece in source cell `cell`, into sp.xs, sp.ys; false when it cannot
 // be built there (a vertex without a point in the cell, an edge that leaves it).
 bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t cell) {
@@ -281,7 +309,8 @@ bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t
         } else {
             double nx, ny;
             if (!vertex_image(sp, p, f, next, cell, x, y, nx, ny)) return false;
-            if (!p.v[k].seam && !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0))
+            if (!p.v[k].seam && !side_path(sp, p, k, cell, x, y) &&
+                !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0))
                 return false;
             k = next;
         }
@@ -460,7 +489,7 @@ void fold_sides(const SlowPath& sp, int64_t cell, double x0, double y0, double x
 // [y0, y1] with that side's fold flag, and as a chord where its tile decided so (`sides`);
 // other edges (arcs, cuts) are left as they are.
 void mark_sides(Piece& p, double x0, double y0, double x1, double y1, const bool fold[4],
-                const int* sides = nullptr) {
+                const SidePath* sides = nullptr) {
     for (int k = 0; k < p.n; ++k) {
         PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
         if (s.arc) continue;
@@ -471,7 +500,8 @@ void mark_sides(Piece& p, double x0, double y0, double x1, double y1, const bool
         else if (s.x == x0 && e.x == x0) side = 3;
         if (side < 0) continue;
         s.fold = fold[side];
-        s.chord = sides && sides[side] == 0;
+        s.chord = sides && sides[side].mode == 0;
+        s.side = sides ? side : -1;
     }
 }
 
@@ -556,7 +586,15 @@ bool refine_segment(const Conversion& cv, const Singular& sing, int64_t ocell, d
 }
 
 void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
-               const SourcePoint* corners, const int* sides) {
+               const SourcePoint* corners, const SidePath* sides) {
+    sp.sides = sides;
+    const double cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
+    for (int k = 0; k < 4; ++k) {
+        sp.side_x[k][0] = cx[k];
+        sp.side_y[k][0] = cy[k];
+        sp.side_x[k][1] = cx[(k + 1) % 4];
+        sp.side_y[k][1] = cy[(k + 1) % 4];
+    }
     const Geometry& d = sp.cv.dst;
     const double cw = double(d.cell_width()), ch = double(d.cell_height());
     const double pixel[4] = {x0, y0, x1, y1};

@@ -45,6 +45,16 @@ struct PixelSums {
     double weight;
 };
 
+// A side of a pixel as the tile that holds the pixel took it: a chord (mode 0), refined by
+// the general path's own rule (1), or the tile's polyline (2): points in `cell`'s
+// coordinates, from the side's start (whose point there is (x0, y0)) to its end, exclusive.
+struct SidePath {
+    int mode = 1;
+    int64_t cell = -1;
+    double x0 = 0.0, y0 = 0.0;
+    std::vector<double> px, py;
+};
+
 // Everything the general path needs; one per band (scratch inside).
 struct SlowPath {
     const Conversion& cv;
@@ -53,6 +63,8 @@ struct SlowPath {
     GreenScratch green;
     std::vector<double> xs, ys;
     PixelSums* sums = nullptr;
+    const SidePath* sides = nullptr;  // the pixel's four sides, when its tile took them
+    double side_x[4][2], side_y[4][2];  // their ends (output pixels)
 
     SlowPath(const Conversion& cv_, const SourceModel& model_, const Singular& sing_)
         : cv(cv_), model(model_), sing(sing_) {}
@@ -162,10 +174,9 @@ bool refine_segment(const Conversion& cv, const Singular& sing, int64_t ocell, d
 // Integrate the output rectangle [x0, x1] x [y0, y1] (level-0 output pixels: a pixel, or a
 // sub-pixel) into *sp.sums: its piece in every output cell it meets, through that cell's map.
 // `corners`, when not null, are the source points of the rectangle's corners (x0, y0),
-// (x1, y0), (x1, y1), (x0, y1), as the pixels around it use them; `sides`, when not null, the
-// decision its tile made for each side (from corner k to k + 1): 0 a chord, else refined by
-// refine_segment's rule.
+// (x1, y0), (x1, y1), (x0, y1), as the pixels around it use them; `sides`, when not null, how
+// its tile took each side (from corner k to k + 1; SidePath).
 void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
-               const SourcePoint* corners, const int* sides = nullptr);
+               const SourcePoint* corners, const SidePath* sides = nullptr);
 
 }  // namespace envconv
