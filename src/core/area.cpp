@@ -50,6 +50,7 @@ double pixel_coverage(const Conversion& cv, const ResampleOutput& out, int64_t i
 void store_sums(const ResampleOutput& out, int64_t i, int64_t j, double w, const double* acc,
                 double coverage) {
     const int64_t nch = out.channels;
+    j -= out.row0;
     float* px = out.pixels + (j * out.width + i) * (out.stride ? out.stride : nch);
     const bool held = w != 0.0 && std::isfinite(w);
     const double inv = held ? 1.0 / w : 0.0;
@@ -62,6 +63,7 @@ void store_sums(const ResampleOutput& out, int64_t i, int64_t j, double w, const
 void store_pixel(const ResampleOutput& out, int64_t i, int64_t j, const PixelSums& s,
                  double coverage) {
     const int64_t nch = out.channels;
+    j -= out.row0;
     float* px = out.pixels + (j * out.width + i) * (out.stride ? out.stride : nch);
     double inv = s.weight > 0.0 ? 1.0 / s.weight : 0.0;
     for (int64_t c = 0; c < nch; ++c) px[c] = s.weight > 0.0 ? float(s.acc[c] * inv) : 0.0f;
@@ -73,19 +75,12 @@ void store_pixel(const ResampleOutput& out, int64_t i, int64_t j, const PixelSum
 void slow_block(const AreaJob& job, SlowPath& sp, PixelSums& sums, int64_t i0, int64_t j0,
                 int64_t i1, int64_t j1) {
     const Conversion& cv = job.cv;
-    const int n = std::max(job.samples, 1);
     for (int64_t j = j0; j < j1; ++j) {
         for (int64_t i = i0; i < i1; ++i) {
             std::fill(sums.acc, sums.acc + sums.nch, 0.0);
             sums.weight = 0.0;
-            double x0 = double(i) * cv.scale_x, y0 = double(j) * cv.scale_y;
-            double dx = cv.scale_x / n, dy = cv.scale_y / n;
-            for (int q = 0; q < n * n; ++q) {
-                double sx0 = x0 + dx * (q % n), sy0 = y0 + dy * (q / n);
-                double sx1 = q % n == n - 1 ? double(i + 1) * cv.scale_x : sx0 + dx;
-                double sy1 = q / n == n - 1 ? double(j + 1) * cv.scale_y : sy0 + dy;
-                slow_rect(sp, sx0, sy0, sx1, sy1, nullptr);
-            }
+            slow_rect(sp, double(i) * cv.scale_x, double(j) * cv.scale_y, double(i + 1) * cv.scale_x,
+                      double(j + 1) * cv.scale_y, nullptr);
             store_pixel(job.out, i, j, sums, pixel_coverage(cv, job.out, i, j));
         }
     }
@@ -633,14 +628,13 @@ bool inside_disk(const Geometry& d, int64_t cell, double x0, double y0, double x
     return fx * fx + fy * fy <= unit * unit;
 }
 
-// One band of kAreaTile output rows: tiles of up to kAreaTile x kAreaTile pixels, cut at output cell
-// edges; tiles in one cell go through tile_pixels, pixels across cell edges one by one.
-void area_band(const AreaJob& job, int64_t band, SlowPath& sp, PixelSums& sums, CornerGrid& grid,
-               TileScratch& ts) {
+// Output rows [j0, j1): tiles of up to kAreaTile x kAreaTile pixels, each inside one output
+// cell through tile_pixels; a tile across cell edges pixel by pixel.
+void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
+               CornerGrid& grid, TileScratch& ts) {
     const Conversion& cv = job.cv;
     const Geometry& d = cv.dst;
     const ResampleOutput& out = job.out;
-    int64_t j0 = band * kAreaTile, j1 = std::min(j0 + kAreaTile, out.height);
     // The right column of the last tile mapped, for the next tile of the same cell.
     std::vector<SourcePoint>& shared = ts.column;
     int64_t shared_cell = -1, shared_i = -1;
@@ -649,14 +643,10 @@ void area_band(const AreaJob& job, int64_t band, SlowPath& sp, PixelSums& sums, 
         double x0 = double(i0) * cv.scale_x, y0 = double(j0) * cv.scale_y;
         double x1 = double(i1) * cv.scale_x, y1 = double(j1) * cv.scale_y;
         if (!cv.fill && out.zeroed && tile_in_empty_cell(d, x0, y0, x1, y1)) continue;
-        bool direct = job.samples <= 1 && direct_allowed.load(std::memory_order_relaxed);
+        bool direct = direct_allowed.load(std::memory_order_relaxed);
         int64_t cell = direct ? rect_cell(d, x0, y0, x1, y1) : -1;
-        if (cell < 0 || d.cell_face[cell] < 0) {
-            slow_block(job, sp, sums, i0, j0, i1, j1);
-            continue;
-        }
-        bool regular = !d.disk() || inside_disk(d, cell, x0, y0, x1, y1);
-        if (d.disk() && !regular) {
+        bool regular = cell >= 0 && d.cell_face[cell] >= 0 && (!d.disk() || inside_disk(d, cell, x0, y0, x1, y1));
+        if (!regular) {
             slow_block(job, sp, sums, i0, j0, i1, j1);
             continue;
         }
@@ -667,6 +657,40 @@ void area_band(const AreaJob& job, int64_t band, SlowPath& sp, PixelSums& sums, 
         shared_cell = cell;
         shared_i = i1;
         tile_pixels(job, sp, sums, grid, ts, cell, regular);
+    }
+}
+
+// Rows [j0, j1) of `out` with samples x samples sub-pixels each: the rows of sub-pixels
+// integrated into a band buffer (a grid `samples` times finer, every sub-pixel exactly), then
+// each pixel the solid-angle-weighted mean of its sub-pixels.
+void sub_pixel_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
+                    CornerGrid& grid, TileScratch& ts, std::vector<float>& buffer,
+                    std::vector<float>& weights) {
+    const int64_t n = job.samples, nch = job.out.channels, width = job.out.width * n;
+    Conversion fine = job.cv;
+    fine.scale_x /= double(n);
+    fine.scale_y /= double(n);
+    buffer.assign(size_t((j1 - j0) * n * width * nch), 0.0f);
+    weights.assign(size_t((j1 - j0) * n * width), 0.0f);
+    ResampleOutput sub{buffer.data(), job.out.height * n, width, nch, nullptr, weights.data(), true};
+    sub.row0 = j0 * n;
+    SlowPath fine_sp(fine, sp.model, sp.sing);
+    fine_sp.sums = &sums;
+    AreaJob fine_job{fine, job.model, job.sing, sub, 1};
+    area_rows(fine_job, j0 * n, j1 * n, fine_sp, sums, grid, ts);
+    for (int64_t j = j0; j < j1; ++j) {
+        for (int64_t i = 0; i < job.out.width; ++i) {
+            double w = 0.0, acc[64] = {};
+            for (int64_t b = 0; b < n; ++b) {
+                for (int64_t a = 0; a < n; ++a) {
+                    int64_t k = ((j - j0) * n + b) * width + i * n + a;
+                    double wk = weights[size_t(k)];
+                    w += wk;
+                    for (int64_t c = 0; c < nch && c < 64; ++c) acc[c] += wk * double(buffer[size_t(k * nch + c)]);
+                }
+            }
+            store_sums(job.out, i, j, w, acc, pixel_coverage(job.cv, job.out, i, j));
+        }
     }
 }
 
@@ -687,7 +711,13 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
         sp.sums = &sums;
         CornerGrid grid;
         TileScratch ts;
-        area_band(job, band, sp, sums, grid, ts);
+        int64_t j0 = band * kAreaTile, j1 = std::min(j0 + kAreaTile, out.height);
+        if (samples > 1) {
+            std::vector<float> buffer, weights;
+            sub_pixel_rows(job, j0, j1, sp, sums, grid, ts, buffer, weights);
+        } else {
+            area_rows(job, j0, j1, sp, sums, grid, ts);
+        }
         int64_t rows = std::min(kAreaTile, out.height - band * kAreaTile);
         if (progress) __atomic_add_fetch(progress, (rows + kTile - 1) / kTile, __ATOMIC_RELAXED);
     });

@@ -24,6 +24,8 @@ struct ResampleOutput {
     // the channel after the colour ones, so an alpha channel needs no second array.
     int64_t stride = 0;
     int64_t alpha_stride = 1;
+    // The first row the arrays hold (the area filter's sub-pixel bands hold a few rows only).
+    int64_t row0 = 0;
 };
 
 // A lat-long source's rip-map levels (rip_levels = 0: none), filled in rip_rows rows per pole.
