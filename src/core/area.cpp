@@ -157,7 +157,7 @@ bool direct_quad(const Geometry& g, int64_t cell, const double* xs, const double
     const double margin = 1e-6;
     double x0 = double((cell % g.columns) * g.cell_width() + g.guard);
     double y0 = double((cell / g.columns) * g.cell_height() + g.guard);
-    double w = double(g.aspect * g.n), h = double(g.n);
+    double w = double(g.nx), h = double(g.n);
     if (!(ymin > y0 + margin && ymax < y0 + h - margin)) return false;
     if (g.family == kLatlong && g.guard == 0) {
         // The corners share one unwrapping, so the outline winds around a pole only where a
@@ -347,7 +347,7 @@ bool whole_tile_direct(const Geometry& g, const CornerGrid& grid) {
     const double margin = 1e-6;
     double x0 = double((cell % g.columns) * g.cell_width() + g.guard);
     double y0 = double((cell / g.columns) * g.cell_height() + g.guard);
-    double w = double(g.aspect * g.n), h = double(g.n);
+    double w = double(g.nx), h = double(g.n);
     if (!(ymin > y0 + margin && ymax < y0 + h - margin)) return false;
     if (g.family == kLatlong && g.guard == 0) return xmax - xmin < 0.5 * w;
     return xmin > x0 + margin && xmax < x0 + w - margin;

@@ -23,6 +23,13 @@ struct Singular {
     Vec3 out[2];   // in the output frame: rot^T src
 };
 
+// True when a disk family's rim circle maps to one direction (the view axis's opposite): a
+// mirror ball, an angular map, a fisheye of 360 degrees.
+inline bool rim_singular(const Chart& c) {
+    return c.family == kSphere || c.family == kAngular ||
+           (c.family == kFisheye && c.param[kScaleX] >= kPi * (1.0 - 1e-12));
+}
+
 inline Singular source_singular(const Conversion& cv) {
     Singular s;
     const Rotation& r = cv.rot;
@@ -36,10 +43,11 @@ inline Singular source_singular(const Conversion& cv) {
         s.count = 2;
         s.src[0] = {0.0, 1.0, 0.0};
         s.src[1] = {0.0, -1.0, 0.0};
-    } else if (cv.src.family == kSphere || cv.src.family == kAngular) {
+    } else if (rim_singular(cv.src)) {
         s.kind = 2;
         s.count = 1;
-        s.src[0] = {0.0, 0.0, -1.0};
+        s.src[0] = cv.src.family == kFisheye ? view::to_world(cv.src, 0.0, 0.0, -1.0)
+                                             : Vec3{0.0, 0.0, -1.0};
     }
     for (int k = 0; k < s.count; ++k) s.out[k] = back(s.src[k]);
     return s;
@@ -97,26 +105,53 @@ inline int on_singular(const Singular& s, const Vec3& d) {
 inline Vec3 output_direction(const Conversion& cv, int64_t cell, double x, double y) {
     double a, b;
     cell_local(cv.dst, cell, x, y, a, b);
-    return cv.rot.apply(face_to_dir(cv.dst.family, cv.dst.cell_face[cell], a, b));
+    return cv.rot.apply(face_to_dir(cv.dst, cv.dst.cell_face[cell], a, b));
+}
+
+// A partial source (a fisheye of less than 360 degrees, a perspective view, padded by
+// resample/partial.py) has no point for a direction it does not cover: its dir_to_face puts
+// such directions on the circle or square of its reach, in the middle of its padding. The
+// area filter gives the part of a footprint beyond the reach its output solid angle and no
+// colour, in a cell of its own (kUncovered), so that the coverage it leaves is exact.
+constexpr int64_t kUncovered = -2;
+
+// False when direction d lies beyond a partial source's reach.
+inline bool source_covers(const Geometry& src, const Vec3& d) {
+    const double reach = src.param[kReach];
+    if (reach <= 0.0 || (src.family != kFisheye && src.family != kPerspective)) return true;
+    Vec3 v = view::to_view(src, d.x, d.y, d.z);
+    if (src.family == kFisheye)
+        return std::atan2(std::hypot(v.x, v.y), v.z) <= src.param[kScaleX] * reach;
+    double a = std::fabs(v.x / src.param[kScaleX]), b = std::fabs(v.y / src.param[kScaleY]);
+    return v.z > 0.0 && std::max(a, b) <= reach * v.z;
 }
 
 // The source point of direction d in the cell that holds it (its own cell's coordinates).
 inline SourcePoint source_of(const Geometry& src, const Vec3& d) {
-    FacePoint f = dir_to_face(src.family, d.x, d.y, d.z);
+    FacePoint f = dir_to_face(src, d.x, d.y, d.z);
     ImagePoint p = face_to_image(src, f.face, f.a, f.b);
     return {p.x, p.y, p.cell};
+}
+
+// The cell of direction d's source point, kUncovered beyond a partial source's reach.
+inline int64_t source_cell(const Geometry& src, const Vec3& d) {
+    return source_covers(src, d) ? source_of(src, d).cell : kUncovered;
 }
 
 // Direction of source point p (its cell's continued map).
 inline Vec3 source_direction(const Geometry& src, const SourcePoint& p) {
     double a, b;
     cell_local(src, p.cell, p.x, p.y, a, b);
-    return face_to_dir(src.family, src.cell_face[p.cell], a, b);
+    return face_to_dir(src, src.cell_face[p.cell], a, b);
 }
 
-// The exact source point of output point (x, y) through output cell `cell`.
+// The exact source point of output point (x, y) through output cell `cell`; its cell is
+// kUncovered beyond a partial source's reach.
 inline SourcePoint exact_source(const Conversion& cv, int64_t cell, double x, double y) {
-    return source_of(cv.src, output_direction(cv, cell, x, y));
+    Vec3 d = output_direction(cv, cell, x, y);
+    SourcePoint p = source_of(cv.src, d);
+    if (!source_covers(cv.src, d)) p.cell = kUncovered;
+    return p;
 }
 
 // Where the singular source point of singular direction k lies in `cell`'s coordinates, seen

@@ -251,7 +251,7 @@ inline double rect_coverage(const Geometry& d, double x0, double y0, double x1, 
             int64_t cell = row * d.columns + col;
             if (d.cell_face[cell] < 0) continue;
             double fx0 = double(col) * cw + double(d.guard), fy0 = double(row) * ch + double(d.guard);
-            double fx1 = fx0 + double(d.aspect * d.n), fy1 = fy0 + double(d.n);
+            double fx1 = fx0 + double(d.nx), fy1 = fy0 + double(d.n);
             double ax = std::max(x0, fx0), bx = std::min(x1, fx1);
             double ay = std::max(y0, fy0), by = std::min(y1, fy1);
             if (!(bx > ax && by > ay)) continue;

@@ -130,7 +130,7 @@ bool refine_edge(SlowPath& sp, const Piece& p, int k, int64_t cell, double t0, d
     edge_point(p, k, tm, ox, oy);
     Vec3 d = output_direction(sp.cv, p.cell, ox, oy);
     if (on_singular(sp.sing, d) >= 0) return true;
-    if (source_of(sp.cv.src, d).cell != cell) return false;
+    if (source_cell(sp.cv.src, d) != cell) return false;
     double mx, my;
     if (!continued_point(sp.cv.src, cell, d, 0.5 * (x0 + x1), 0.5 * (y0 + y1), mx, my)) return false;
     const double h = 1e-3;
@@ -377,7 +377,7 @@ bool split_at_seam(SlowPath& sp, const Piece& p, const VertexFacts& f, int depth
         for (int it = 0; it < 52; ++it) {
             double t = 0.5 * (lo + hi), ox, oy;
             edge_point(p, k, t, ox, oy);
-            int64_t c = source_of(sp.cv.src, output_direction(sp.cv, p.cell, ox, oy)).cell;
+            int64_t c = source_cell(sp.cv.src, output_direction(sp.cv, p.cell, ox, oy));
             (c == f.cell[k] ? lo : hi) = t;
         }
         PieceVertex v = p.v[k];
@@ -450,7 +450,11 @@ void process_piece(SlowPath& sp, Piece& p, int depth) {
     if (cell < 0) {
         double cx, cy;
         piece_centre(p, cx, cy);
-        cell = source_of(sp.cv.src, output_direction(sp.cv, p.cell, cx, cy)).cell;
+        cell = source_cell(sp.cv.src, output_direction(sp.cv, p.cell, cx, cy));
+    }
+    if (cell == kUncovered) {
+        add_leftover(sp, p, false);
+        return;
     }
     bool built = build_footprint(sp, p, f, cell);
     for (int s = 0; built && s < 2; ++s)
@@ -514,7 +518,7 @@ Piece rect_piece(int64_t cell, double x0, double y0, double x1, double y1,
     const double xs[4] = {x0, x1, x1, x0}, ys[4] = {y0, y0, y1, y1};
     for (int k = 0; k < 4; ++k) {
         p.v[k] = plain_vertex(xs[k], ys[k]);
-        if (corners && xs[k] == pixel[k == 1 || k == 2 ? 2 : 0] &&
+        if (corners && corners[k].cell >= 0 && xs[k] == pixel[k == 1 || k == 2 ? 2 : 0] &&
             ys[k] == pixel[k >= 2 ? 3 : 1]) {
             p.v[k].mapped = true;
             p.v[k].src = corners[k];
@@ -532,7 +536,7 @@ void disk_pieces(SlowPath& sp, int64_t cell, double x0, double y0, double x1, do
     double cx, cy, unit;
     cell_disk(d, cell, cx, cy, unit);
     double readable = unit + double(d.guard);
-    bool singular_rim = d.family != kParaboloid;
+    bool singular_rim = rim_singular(d);
     Piece p;
     p.cell = cell;
     p.cx = cx;
@@ -570,7 +574,7 @@ bool refine_segment(const Conversion& cv, const Singular& sing, int64_t ocell, d
     const double ox = 0.5 * (ox0 + ox1), oy = 0.5 * (oy0 + oy1), h = 1e-3;
     Vec3 d = output_direction(cv, ocell, ox, oy);
     if (on_singular(sing, d) >= 0) return true;
-    if (source_of(cv.src, d).cell != cell) return false;
+    if (source_cell(cv.src, d) != cell) return false;
     double mx, my, qx, qy;
     if (!continued_point(cv.src, cell, d, 0.5 * (x0 + x1), 0.5 * (y0 + y1), mx, my)) return false;
     double len = std::hypot(ox1 - ox0, oy1 - oy0);

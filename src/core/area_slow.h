@@ -101,8 +101,9 @@ inline void add_footprint(SlowPath& sp, int64_t cell) {
     integrate_any(sp.xs.data(), sp.ys.data(), n, sink, sp.green);
 }
 
-// A piece that did not resolve: the texel at its centre, with the piece's own solid angle.
-inline void add_leftover(SlowPath& sp, const Piece& p) {
+// A piece that did not resolve: the texel at its centre (no colour with `colour` false: a
+// piece beyond a partial source's reach), with the piece's own solid angle.
+inline void add_leftover(SlowPath& sp, const Piece& p, bool colour = true) {
     double cx = 0.0, cy = 0.0, area = 0.0;
     for (int k = 0; k < p.n; ++k) {
         const PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
@@ -115,14 +116,15 @@ inline void add_leftover(SlowPath& sp, const Piece& p) {
     const Geometry& d = sp.cv.dst;
     double a, b;
     cell_local(d, p.cell, cx, cy, a, b);
-    double w = 0.5 * std::fabs(area) * density(d.family, d.cell_face[p.cell], a, b) *
-               (2.0 / double(d.aspect * d.n)) * (2.0 / double(d.n));
+    double w = 0.5 * std::fabs(area) * density(d, d.cell_face[p.cell], a, b) *
+               (2.0 / double(d.nx)) * (2.0 / double(d.n));
     if (!(w > 0.0)) return;
+    sp.sums->weight += w;
+    if (!colour) return;
     SourcePoint s = source_of(sp.cv.src, output_direction(sp.cv, p.cell, cx, cy));
     const float* v = area_texel(sp.model.image, sp.cv.src, s.cell, floor_index(s.x),
                                 floor_index(s.y));
     for (int64_t c = 0; c < sp.sums->nch; ++c) sp.sums->acc[c] += w * double(v[c]);
-    sp.sums->weight += w;
 }
 
 // Per-vertex facts of a piece: source direction, true cell, singular index (-1 if none).
@@ -140,7 +142,7 @@ inline void vertex_facts(const SlowPath& sp, Piece& p, VertexFacts& f) {
         int s = on_singular(sp.sing, f.dir[k]);
         if (s < 0 && v.snapped >= 0) s = v.snapped;
         f.singular[k] = s;
-        f.cell[k] = source_of(sp.cv.src, f.dir[k]).cell;
+        f.cell[k] = source_cell(sp.cv.src, f.dir[k]);
     }
 }
 

@@ -32,8 +32,9 @@ struct TexelDensity {
     double m, gx, gy;
 };
 
-// Continued (a, b) of direction d on cube face `face` (GL or EXR family), false when d is not
-// in front of the face's plane.
+// Continued (a, b) of direction d on cube face `face` (GL, EXR or equi-angular family: the
+// face plane's coordinates, which eac then takes to its angles, continued past the face as
+// layouts.h continues it), false when d is not in front of the face's plane.
 inline bool cube_face_coords(int family, int face, const Vec3& d, double& a, double& b) {
     const double tiny = 1e-9;
     double cx = family == kCubeGL ? -d.x : d.x, cy = d.y, cz = d.z;
@@ -46,6 +47,15 @@ inline bool cube_face_coords(int family, int face, const Vec3& d, double& a, dou
             case 3: s = -cy; a = cx; b = -cz; break;
             case 4: s = cz; a = cx; b = -cy; break;
             default: s = -cz; a = -cx; b = -cy; break;
+        }
+    } else if (family == kEac) {  // the faces of views.h's eac table
+        switch (face) {
+            case 0: s = cx; a = cz; b = -cy; break;
+            case 1: s = cz; a = -cx; b = -cy; break;
+            case 2: s = -cx; a = -cz; b = -cy; break;
+            case 3: s = -cy; a = -cz; b = cx; break;
+            case 4: s = -cz; a = cy; b = cx; break;
+            default: s = cy; a = cz; b = cx; break;
         }
     } else {
         switch (face) {
@@ -60,6 +70,14 @@ inline bool cube_face_coords(int family, int face, const Vec3& d, double& a, dou
     if (!(s > tiny)) return false;
     a /= s;
     b /= s;
+    if (family == kEac) {  // eac::plane inverted
+        auto angle = [](double p) {
+            return std::fabs(p) <= 1.0 ? (4.0 / kPi) * std::atan(p)
+                                       : std::copysign(1.0 + (std::fabs(p) - 1.0) * (2.0 / kPi), p);
+        };
+        a = angle(a);
+        b = angle(b);
+    }
     return true;
 }
 
@@ -94,6 +112,7 @@ inline bool continued_point(const Geometry& g, int64_t cell, const Vec3& d, doub
     switch (g.family) {
         case kCubeGL:
         case kCubeExr:
+        case kEac:
             if (!cube_face_coords(g.family, face, d, a, b)) return false;
             break;
         case kParaboloid: {
@@ -117,7 +136,7 @@ inline bool continued_point(const Geometry& g, int64_t cell, const Vec3& d, doub
             break;
         }
         default: {
-            FacePoint f = dir_to_face(g.family, d.x, d.y, d.z);
+            FacePoint f = dir_to_face(g, d.x, d.y, d.z);
             a = f.a;
             b = f.b;
         }
@@ -140,15 +159,19 @@ inline bool continued_point(const Geometry& g, int64_t cell, const Vec3& d, doub
 
 // The solid-angle density a source texel integrates (layouts.h's, continued without the
 // absolute values past a rim, so that it stays smooth across it), sr per unit (a, b) area.
-inline double area_density(int family, double a, double b) {
-    switch (family) {
+inline double area_density(const Chart& c, double a, double b) {
+    switch (c.family) {
         case kSphere: return 4.0;
         case kAngular: {
             double r = std::sqrt(a * a + b * b);
             return r < 1e-9 ? kPi * kPi : kPi * std::sin(kPi * r) / r;
         }
         case kEqualArea: return kPi;
-        default: return density(family, 0, a, b);
+        case kFisheye: {
+            double r = std::sqrt(a * a + b * b), h = c.param[kScaleX];
+            return r < 1e-9 ? h * h : h * std::sin(h * r) / r;
+        }
+        default: return density(c, 0, a, b);
     }
 }
 
@@ -167,7 +190,7 @@ struct SourceModel {
     double area;                       // (a, b) area of one texel
 
     SourceModel(const Image& image_, const Geometry& g_) : image(image_), g(g_) {
-        area = (2.0 / double(g.aspect * g.n)) * (2.0 / double(g.n));
+        area = (2.0 / double(g.nx)) * (2.0 / double(g.n));
         if (g.family == kLatlong || g.family == kTennisball) fill_rows();
     }
 
@@ -181,7 +204,7 @@ struct SourceModel {
         row_g.resize(size_t(ch));
         bool band = g.family == kTennisball;
         double half = band ? tennisball::kThetaHalf : 0.5 * kPi;       // latitude of b = -1
-        double dlon = band ? 1.5 * kPi / double(g.aspect * g.n) : kPi / double(g.n);
+        double dlon = band ? 1.5 * kPi / double(g.nx) : kPi / double(g.n);
         double dlat = 2.0 * half / double(g.n);                         // per pixel
         for (int64_t r = 0; r < ch; ++r) {
             double top = half - dlat * double(r - g.guard);
@@ -211,7 +234,7 @@ struct SourceModel {
             double a, b;
             cell_local(g, cell, double(ix) + 0.5 + (q & 1 ? off : -off),
                        double(iy) + 0.5 + (q & 2 ? off : -off), a, b);
-            v[q >> 1][q & 1] = area_density(g.family, a, b);
+            v[q >> 1][q & 1] = area_density(g, a, b);
         }
         double m = 0.25 * (v[0][0] + v[0][1] + v[1][0] + v[1][1]);
         double gx = 0.5 * (v[0][1] + v[1][1] - v[0][0] - v[1][0]) / (2.0 * off);
@@ -226,7 +249,7 @@ struct SourceModel {
 inline bool area_readable(const Geometry& g, int64_t cell, int64_t ix, int64_t iy) {
     int64_t cw = g.cell_width(), ch = g.cell_height();
     int64_t x0 = (cell % g.columns) * cw + g.guard, y0 = (cell / g.columns) * ch + g.guard;
-    int64_t w = g.aspect * g.n, h = g.n;
+    int64_t w = g.nx, h = g.n;
     if (ix < x0 || ix >= x0 + w || iy < y0 || iy >= y0 + h) return false;
     if (!g.disk()) return true;
     double c = 0.5 * double(g.n);  // the disk's centre and radius, in pixels from (x0, y0)

@@ -45,7 +45,7 @@ struct CornerGrid {
 
 // Exact source point of output corner (x, y) through output cell `cell`.
 inline SourcePoint exact_corner(const Conversion& cv, int64_t cell, double x, double y) {
-    return source_of(cv.src, output_direction(cv, cell, x, y));
+    return exact_source(cv, cell, x, y);
 }
 
 // Express corner k of the grid (an exact point) in the reference cell's coordinates, near
@@ -54,6 +54,7 @@ inline bool to_reference(const Conversion& cv, CornerGrid& g, size_t k, double r
                          double ref_y) {
     const SourcePoint& p = g.exact[k];
     const Geometry& s = cv.src;
+    if (p.cell < 0) return false;  // beyond a partial source's reach
     if (p.cell == g.ref_cell && s.family != kLatlong && s.family != kTennisball &&
         s.family != kOctahedral && s.family != kEqualArea) {
         g.x[k] = p.x;
@@ -162,6 +163,7 @@ inline bool coons_fill(const Conversion& cv, int64_t cell, CornerGrid& g, int a0
         size_t k = g.at(i, j);
         SourcePoint e = exact_corner(cv, cell, double(g.i0 + i) * cv.scale_x,
                                      double(g.j0 + j) * cv.scale_y);
+        if (e.cell < 0) return false;
         double ex, ey;
         if (!continued_point(cv.src, g.ref_cell, source_direction(cv.src, e), g.x[k], g.y[k], ex, ey))
             return false;
@@ -254,6 +256,13 @@ inline void map_grid(const Conversion& cv, int64_t cell, int64_t i0, int64_t j0,
     for (int j = 1; j < h; ++j) map_exact(cv, cell, g, w, j);
     const SourcePoint& first = g.exact[0];
     g.ref_cell = first.cell;
+    if (first.cell < 0) {  // beyond a partial source's reach: every corner for the general path
+        for (int j = 1; j < h; ++j)
+            for (int i = 1; i < w; ++i) map_exact(cv, cell, g, i, j);
+        g.usable = false;
+        g.bend = 1e300;
+        return;
+    }
     g.x[0] = first.x;
     g.y[0] = first.y;
     // The boundary is expressed along its four sides; the far corner, reached both ways, must
