@@ -78,7 +78,7 @@ def convert(
     to: Layout | str,
     size: int | None = None,
     samples: int | str | None = "auto",
-    filter: str = "bilinear",
+    filter: str = "area",
     rotate=None,
     guard: int | str = 0,
     alpha: bool = False,
@@ -216,6 +216,10 @@ def _resample(
         raise LayoutError(f"size must be a positive integer, got {size!r}")
     size = check_size(size)
     n_samples = check_samples(samples)
+    if n_samples is None and filter == "area":
+        # The area filter integrates each pixel exactly: one piece per pixel is the exact mean
+        # (and every mip level, a weighted block mean of level 0, is exact too).
+        n_samples = 1
     if n_samples is None and mips:
         n_samples = auto_samples(envmap, to, size)
     if n_samples is None and irradiance:
@@ -331,7 +335,7 @@ def _level0_unused(
 
 
 def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False,
-                  samples="auto", filter="bilinear", out_convention=None) -> int | None:  # fmt: skip
+                  samples="auto", filter="area", out_convention=None) -> int | None:  # fmt: skip
     """Estimated peak bytes of :func:`convert` with these arguments and of writing its result
     (:func:`envconv.engine.memory.estimate_convert`); None for arguments :func:`convert` refuses."""
     from ..engine import memory

@@ -35,14 +35,19 @@ __all__ = [
     "reduce_blocks", "map_points_to_dirs", "map_dirs_to_points", "pixel_solid_angles",
     "dir_density", "face_to_dir", "dir_to_face", "density", "filtered_reads", "level_reads",
     "ibl_pyramid", "ibl_pyramid_binned", "ibl_pyramid_binned_any", "ibl_prefilter", "sh_project",
-    "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
+    "FILTER_NEAREST", "FILTER_BILINEAR", "FILTER_BICUBIC", "AREA_FILTER", "RIP_MIN_SPAN", "RIP_MAX_LEVELS",
     "TILE", "AUTO_MAX_SAMPLES", "AUTO_EDGE_SAMPLES", "FAMILY_LATLONG", "FAMILY_CUBE_GL",
     "FAMILY_CUBE_EXR", "FAMILY_SPHERE", "FAMILY_ANGULAR", "FAMILY_PARABOLOID", "FAMILY_TENNISBALL",
     "FAMILY_OCTAHEDRAL", "FAMILY_EQUAL_AREA", "FAMILY_EAC", "FAMILY_FISHEYE", "FAMILY_PERSPECTIVE",
     "DISK_FAMILIES", "PARAM_COUNT",
 ]  # fmt: skip
 
-FILTER_NEAREST, FILTER_BILINEAR, FILTER_BICUBIC = 0, 1, 2
+#: Filter codes (src/core/taps.h FilterCode): three point filters, and the area filter
+#: (src/core/area.cpp) that integrates the box reconstruction over each pixel's footprint.
+FILTER_NEAREST = _core.FILTER_NEAREST
+FILTER_BILINEAR = _core.FILTER_BILINEAR
+FILTER_BICUBIC = _core.FILTER_BICUBIC
+AREA_FILTER = _core.FILTER_AREA
 #: Geometry family codes, as the core dispatches on them (src/core/layouts.h); the layouts
 #: take them from here (:mod:`envconv.layouts.base`), so Python never restates them.
 FAMILY_LATLONG = _core.FAMILY_LATLONG

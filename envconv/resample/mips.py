@@ -164,6 +164,12 @@ def _fallback_level(source, to, size, guard, fill, samples, filt, rot, sizes, le
     scale = (w0 / wk, h0 / hk)
     dgeo_all = kernel_geometry(to, size, guard)
     cover = levels[0][1] is not None
+    if filt == kernels.AREA_FILTER:
+        # The area filter integrates each texel of level k exactly, from the source itself.
+        log.debug("mip level %d: %dx%d from the source, exact area", k, wk, hk)
+        sgeo = kernel_geometry(source.layout, source.size, source.guard)
+        return _run_direct(source.pixels, sgeo, rot, dgeo_all, fill, (hk, wk), scale, 1, filt,
+                           cover)  # fmt: skip
     for j in range(k - 1, 0, -1):
         step = 1 << j
         wj, hj = sizes[j]

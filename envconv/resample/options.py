@@ -18,13 +18,19 @@ from ..layouts import Layout, get_layout
 from ..layouts.conventions import resolve_convention
 from ..layouts.geometry import horizon_pitch
 from ..limits import check_size as bounded_size
+from . import kernels
 
 __all__ = ["FILTERS", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
            "check_samples", "check_guard", "check_mips", "check_conventions", "check_roughness",
            "output_channels", "check_size", "check_output", "output_layout"]  # fmt: skip
 
-#: Reconstruction filters by name → kernel code.
-FILTERS = {"nearest": 0, "bilinear": 1, "bicubic": 2, "area": 3}
+#: Reconstruction filters by name → kernel code; the first is the default.
+FILTERS = {
+    "area": kernels.AREA_FILTER,
+    "bilinear": kernels.FILTER_BILINEAR,
+    "bicubic": kernels.FILTER_BICUBIC,
+    "nearest": kernels.FILTER_NEAREST,
+}
 MAX_SAMPLES = 32
 #: How a GGX chain's levels get their roughness (:func:`envconv.resample.ibl.roughness_levels`).
 ROUGHNESS_MAPPINGS = ("gltf", "filament", "unreal")

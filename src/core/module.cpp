@@ -403,6 +403,10 @@ NB_MODULE(_core, m) {
     m.attr("FAMILY_COUNT") = envconv::kFamilyCount;
     // The geometry family codes (src/core/chart.h), the one table Python reads them from
     // (envconv/layouts/base.py FAMILY_*), and the families whose cells hold a unit disk.
+    m.attr("FILTER_NEAREST") = int(envconv::kNearest);
+    m.attr("FILTER_BILINEAR") = int(envconv::kBilinear);
+    m.attr("FILTER_BICUBIC") = int(envconv::kBicubic);
+    m.attr("FILTER_AREA") = int(envconv::kArea);
     m.attr("FAMILY_LATLONG") = int(envconv::kLatlong);
     m.attr("FAMILY_CUBE_GL") = int(envconv::kCubeGL);
     m.attr("FAMILY_CUBE_EXR") = int(envconv::kCubeExr);
