@@ -408,13 +408,15 @@ void pixel_polygon(const CornerGrid& g, const TileScratch& ts, int i, int j,
     side(g.at(i, j + 1), e.vertical(i, j), true);
 }
 
-// True when a fold of the output or source map (area_map.h) may touch the tile.
-bool tile_on_fold(const Conversion& cv, const CornerGrid& g, int64_t cell) {
-    if (cv.src.family == kOctahedral || cv.src.family == kEqualArea) return true;
+// True when a fold of an octahedral or equal-area output (its axes, its rim and the diamond
+// |a| + |b| = 1 where the hemispheres meet) may touch the output box [x0, x1] x [y0, y1] of
+// cell `cell` (image pixels, edges included).
+bool box_on_output_fold(const Conversion& cv, int64_t cell, double x0, double y0, double x1,
+                        double y1) {
     if (cv.dst.family != kOctahedral && cv.dst.family != kEqualArea) return false;
-    double a0, b0, a1, b1;  // the tile's (a, b) box, its edges included
-    cell_local(cv.dst, cell, double(g.i0) * cv.scale_x, double(g.j0) * cv.scale_y, a0, b0);
-    cell_local(cv.dst, cell, double(g.i0 + g.w) * cv.scale_x, double(g.j0 + g.h) * cv.scale_y, a1, b1);
+    double a0, b0, a1, b1;
+    cell_local(cv.dst, cell, x0, y0, a0, b0);
+    cell_local(cv.dst, cell, x1, y1, a1, b1);
     double alo = std::min(a0, a1), ahi = std::max(a0, a1), blo = std::min(b0, b1), bhi = std::max(b0, b1);
     for (double line : {-1.0, 0.0, 1.0})
         if ((alo <= line && line <= ahi) || (blo <= line && line <= bhi)) return true;
@@ -426,6 +428,13 @@ bool tile_on_fold(const Conversion& cv, const CornerGrid& g, int64_t cell) {
         }
     }
     return lo <= 1.0 && 1.0 <= hi;
+}
+
+// True when a fold of the output or source map (area_map.h) may touch the tile.
+bool tile_on_fold(const Conversion& cv, const CornerGrid& g, int64_t cell) {
+    if (cv.src.family == kOctahedral || cv.src.family == kEqualArea) return true;
+    return box_on_output_fold(cv, cell, double(g.i0) * cv.scale_x, double(g.j0) * cv.scale_y,
+                              double(g.i0 + g.w) * cv.scale_x, double(g.j0 + g.h) * cv.scale_y);
 }
 
 // How far (output pixels across) the image of the grid's edge from corner (i, j) to
@@ -519,10 +528,31 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
             e.refine[index] = -1;
         }
     };
+    // A lat-long edge's points must stay in its corners' unwrapping: a step of a quarter turn
+    // or more between neighbours means a point was wrapped apart (the pixel's columns would
+    // not be its own), and its pixels go through the general path.
+    const bool wraps = cv.src.family == kLatlong && cv.src.guard == 0;
+    const double quarter = 0.25 * double(cv.src.nx);
+    auto unwrapped = [&](size_t index, int i0, int j0, int di, int dj) {
+        double x = g.x[g.at(i0, j0)];
+        for (int32_t m = e.first[index]; m < int32_t(e.px.size()); ++m) {
+            if (!(std::fabs(e.px[size_t(m)] - x) < quarter)) return false;
+            x = e.px[size_t(m)];
+        }
+        return std::fabs(g.x[g.at(i0 + di, j0 + dj)] - x) < quarter;
+    };
+    auto checked_edge = [&](size_t index, int i0, int j0, int di, int dj) {
+        edge(index, i0, j0, di, dj);
+        if (wraps && e.refine[index] > 0 && !unwrapped(index, i0, j0, di, dj)) {
+            e.px.resize(size_t(e.first[index]));
+            e.py.resize(size_t(e.first[index]));
+            e.refine[index] = -1;
+        }
+    };
     for (int j = 0; j <= h; ++j)
-        for (int i = 0; i < w; ++i) edge(e.horizontal(i, j), i, j, 1, 0);
+        for (int i = 0; i < w; ++i) checked_edge(e.horizontal(i, j), i, j, 1, 0);
     for (int j = 0; j < h; ++j)
-        for (int i = 0; i <= w; ++i) edge(e.vertical(i, j), i, j, 0, 1);
+        for (int i = 0; i <= w; ++i) checked_edge(e.vertical(i, j), i, j, 0, 1);
     e.first.back() = int32_t(e.px.size());
     for (int j = 0; j < h; ++j) {
         for (int i = 0; i < w; ++i) {
@@ -559,7 +589,11 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
         for (int i = 0; i < grid.w; ++i) {
             const double xs[4] = {x[i], x[i + 1], x[i + 1 + st], x[i + st]};
             const double ys[4] = {y[i], y[i + 1], y[i + 1 + st], y[i + st]};
-            direct_row[i] = direct_quad(s, grid.ref_cell, xs, ys);
+            // A pixel cut by an output fold has kinked sides, which no grid estimate holds:
+            // the general path finds the kinks.
+            const double px0 = double(grid.i0 + i) * cv.scale_x, py0 = double(grid.j0 + j) * cv.scale_y;
+            direct_row[i] = direct_quad(s, grid.ref_cell, xs, ys) &&
+                            !box_on_output_fold(cv, cell, px0, py0, px0 + cv.scale_x, py0 + cv.scale_y);
         }
     }
     ts.curved = usable && !straight;
