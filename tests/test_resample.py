@@ -248,7 +248,8 @@ def small_source():
 def test_kernel_matches_naive(name, samples, small_source):
     n = 12 if name == "latlong" else 8
     result = envconv.convert(
-        envconv.EnvMap(small_source, "latlong"), to=name, size=n, samples=samples, alpha=True
+        envconv.EnvMap(small_source, "latlong"), to=name, size=n, samples=samples, alpha=True,
+        filter="bilinear",
     )
     expected, coverage = naive.naive_convert(small_source, name, n, samples)
     scale = np.abs(expected).max()
@@ -261,7 +262,8 @@ def test_kernel_matches_naive(name, samples, small_source):
 def test_kernel_matches_naive_rotated(name, samples, small_source):
     angles = (30.0, 20.0, 10.0)
     result = envconv.convert(
-        envconv.EnvMap(small_source, "latlong"), to=name, size=8, samples=samples, rotate=angles
+        envconv.EnvMap(small_source, "latlong"), to=name, size=8, samples=samples, rotate=angles,
+        filter="bilinear",
     )
     expected, _ = naive.naive_convert(
         small_source, name, 8, samples, rotation=_rotation_matrix(*angles)

@@ -172,11 +172,27 @@ def convert(
             from .partial import pad_partial
 
             envmap = pad_partial(envmap)
+        if _rim_to_mirror_ball(envmap, to, filter):
+            envmap = convert(envmap, "latlong", size=round(1.5 * default_size(envmap, "latlong")),
+                             in_convention=in_convention)  # fmt: skip
+            options["in_convention"] = None
         if envmap.valid is not None or envmap.parts:
             from .holes import convert_with_holes
 
             return convert_with_holes(envmap, to, _resample, **options)
         return _resample(envmap, to, **options)
+
+
+#: Sources whose whole rim is one direction (−Z): the area filter cannot yet take them into a
+#: mirror ball, whose own rim is −Z too (a one-texel sun there moves by up to 1 %): such a
+#: conversion goes through an exact lat-long 1.5 times finer than the source at the horizon.
+RIM_SOURCES = ("sphere", "angular")
+
+
+def _rim_to_mirror_ball(envmap: EnvMap, to: Layout, filter: str) -> bool:
+    """True when ``envmap`` → ``to`` takes the lat-long step of RIM_SOURCES."""
+    return (filter == "area" and to.name == "sphere" and envmap.layout.name in RIM_SOURCES
+            and envmap.valid is None and not envmap.parts)  # fmt: skip
 
 
 def _resample(

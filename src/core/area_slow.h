@@ -31,7 +31,7 @@ namespace envconv {
 // ways, whose chords' errors add up rather than cancel). The test depends on the edge alone,
 // so the two pixels that share an edge agree on it. Interpolated corners may be kCornerTol
 // from their exact images (area_tiles.h), in output pixels too.
-constexpr double kChordTol = 2e-3;
+constexpr double kChordTol = 5e-4;
 constexpr double kCornerTol = 1e-3;
 constexpr int kMaxRefine = 16;       // halvings of an edge
 constexpr int kMaxPieceDepth = 8;    // splits of a piece
