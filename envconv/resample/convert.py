@@ -267,6 +267,8 @@ def _resample(
     # The coverage is kept for an alpha channel, the GGX and irradiance chains and the
     # same-grid copy below (a plain chain needs only the weights).
     needs_coverage = alpha or same_grid or (mips and (ggx or irradiance))
+    # Guard and fill pixels of the area filter are read as the point kernel reads them.
+    needs_coverage = needs_coverage or (filter == "area" and (fill or guard_px > 0))
     coverage = None
     if direct_alpha:
         coverage = out[:, :, -1]
@@ -295,6 +297,8 @@ def _resample(
             zeroed=True, coverage_channel=direct_alpha,
         )  # fmt: skip
         del rip
+        if filter == "area" and (fill or guard_px > 0):
+            _point_guard(src, sgeo, dgeo, rot, fill, out, coverage, direct_alpha)
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
         # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
@@ -336,6 +340,22 @@ def _resample(
         pixel_type=envmap.pixel_type,
         levels=[o for o, _ in chain] if mips else None,
     )
+
+
+def _point_guard(src, sgeo, dgeo, rot, fill, out, coverage, direct_alpha) -> None:
+    """Give the area filter's guard and fill pixels (their centre outside the valid region) the
+    bilinear read at their centre's continued direction, as a GPU's filter across the edge
+    expects: the mean over such a pixel's footprint, which the continued map may stretch a
+    long way, is not. Their coverage (alpha) stays the area filter's."""
+    height, width, nch = out.shape
+    nch -= int(direct_alpha)
+    ring = np.zeros((height, width, nch), np.float32)
+    centre_valid = np.zeros((height, width), np.float32)
+    no_rips = np.zeros((1, 1, src.shape[2]), np.float32)
+    kernels.resample_rows(src, no_rips, 0, 0, sgeo, dgeo, 1.0, 1.0, 1, FILTERS["bilinear"], rot,
+                          fill, ring, centre_valid, None, zeroed=True)  # fmt: skip
+    outside = centre_valid == 0
+    out[:, :, :nch][outside] = ring[outside]
 
 
 def _level0_unused(
