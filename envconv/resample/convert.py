@@ -187,6 +187,9 @@ def convert(
 #: mirror ball, whose own rim is −Z too (a one-texel sun there moves by up to 1 %): such a
 #: conversion goes through an exact lat-long 1.5 times finer than the source at the horizon.
 RIM_SOURCES = ("sphere", "angular")
+#: Folded squares: the area filter takes them turned (any rotation, axes or convention matrix)
+#: through an exact lat-long 1.5 times finer at the horizon (see _resample).
+FOLDED_SOURCES = ("octahedral", "equal-area")
 
 
 def _rim_to_mirror_ball(envmap: EnvMap, to: Layout, filter: str) -> bool:
@@ -226,6 +229,11 @@ def _resample(
     guard_px = 0 if fill else check_guard(guard)
     if filter not in FILTERS:
         raise UsageError(f"unknown filter {filter!r}; choose one of {', '.join(FILTERS)}")
+    if filter == "area" and mips and (fill or guard_px > 0):
+        # The area filter does not yet make the guard rings of a mip chain: such a chain is
+        # point-sampled, as before the area filter (docs/conventions.md, "Resampling").
+        log.info("mip chain with a guard ring: point-sampled with the bilinear filter")
+        filter = "bilinear"
     if size is None:
         size = default_size(envmap, to, cout, mips=_chain_request(mips, ggx), guard=guard)
     if not isinstance(size, (int, np.integer)) or size < 1:
@@ -249,6 +257,12 @@ def _resample(
     # Conventions (envconv.layouts.conventions): d_source = M_inᵀ Aᵀ Rᵀ M_out d.
     rot = cin.matrix.T @ environment_axes(up, axes).T @ rot @ cout.matrix
     rot = np.ascontiguousarray(rot)
+    if filter == "area" and envmap.layout.name in FOLDED_SOURCES and not np.allclose(rot, np.eye(3)):
+        # Turned, a folded square's footprints are not yet integrated right: go through an
+        # exact lat-long of the same environment (rot keeps its meaning: same directions).
+        flat_size = round(1.5 * default_size(envmap, "latlong"))
+        envmap = _resample(envmap, "latlong", flat_size, samples, filter, None, 0, False, None,
+                           None, False, None, None, None, None)  # fmt: skip
 
     width, height = to.image_size(size, guard_px)
     src = envmap.pixels
