@@ -179,7 +179,8 @@ def test_envconv_writes_the_square_makeequiarea_writes(smooth_latlong):
     blurs a little more; a transposed or unconverted square is far off."""
     n, s = 96, 4
     sky = envconv.EnvMap(smooth_latlong.astype(np.float32), "latlong")
-    ours = envconv.convert(sky, "equal-area", size=n, samples=s, out_convention="pbrt").pixels
+    ours = envconv.convert(sky, "equal-area", size=n, samples=s, out_convention="pbrt",
+                           filter="bilinear").pixels  # fmt: skip
     box = ports.make_equiarea(smooth_latlong, n, samples=s, filter="box")
     # Away from the lat-long's top and bottom half-row, where pbrt clamps and envconv continues
     # over the pole, the two bilinear reads are the same arithmetic.
@@ -219,7 +220,10 @@ def test_cli_convert_to_pbrt_and_back(tmp_path, smooth_latlong):
     sky = tmp_path / "sky.exr"
     write_plain(sky, smooth_latlong)
     out = tmp_path / "sky_ea.exr"
-    result = run_cli(["convert", sky, out, "--to", "equal-area", "--out-convention", "pbrt"])
+    # The point kernel, as makeequiarea reads (the default area filter's box means differ
+    # from its centre reads by 0.3 % RMS at this magnification).
+    result = run_cli(["convert", sky, out, "--to", "equal-area", "--out-convention", "pbrt",
+                      "--filter", "bilinear"])  # fmt: skip
     assert result.exit_code == 0, result.stderr
     assert stderr_lines(result) == []
     import OpenImageIO as oiio

@@ -172,6 +172,11 @@ def convert(
             from .partial import pad_partial
 
             envmap = pad_partial(envmap)
+            if filter == "area":
+                # The area filter does not yet stop exactly at a partial view's edge (its
+                # coverage reaches a few texels past it): a view is read by the point kernel.
+                log.info("partial view source: point-sampled with the bilinear filter")
+                options["filter"] = "bilinear"
         if _rim_to_mirror_ball(envmap, to, filter):
             envmap = convert(envmap, "latlong", size=round(1.5 * default_size(envmap, "latlong")),
                              in_convention=in_convention)  # fmt: skip
@@ -229,10 +234,12 @@ def _resample(
     guard_px = 0 if fill else check_guard(guard)
     if filter not in FILTERS:
         raise UsageError(f"unknown filter {filter!r}; choose one of {', '.join(FILTERS)}")
-    if filter == "area" and mips and (fill or guard_px > 0):
-        # The area filter does not yet make the guard rings of a mip chain: such a chain is
-        # point-sampled, as before the area filter (docs/conventions.md, "Resampling").
-        log.info("mip chain with a guard ring: point-sampled with the bilinear filter")
+    if filter == "area" and (fill or guard_px > 0):
+        # A guard ring holds what a GPU's filter reads across the edge: the texel on the
+        # other side (an octahedral map's mirrored border) or the continued direction's
+        # value, read at the pixel's centre. The area filter does not make those yet: a
+        # guarded map is point-sampled, as before it (docs/conventions.md, "Resampling").
+        log.info("guard ring: point-sampled with the bilinear filter")
         filter = "bilinear"
     if size is None:
         size = default_size(envmap, to, cout, mips=_chain_request(mips, ggx), guard=guard)
@@ -281,8 +288,6 @@ def _resample(
     # The coverage is kept for an alpha channel, the GGX and irradiance chains and the
     # same-grid copy below (a plain chain needs only the weights).
     needs_coverage = alpha or same_grid or (mips and (ggx or irradiance))
-    # Guard and fill pixels of the area filter are read as the point kernel reads them.
-    needs_coverage = needs_coverage or (filter == "area" and (fill or guard_px > 0))
     coverage = None
     if direct_alpha:
         coverage = out[:, :, -1]
@@ -311,8 +316,6 @@ def _resample(
             zeroed=True, coverage_channel=direct_alpha,
         )  # fmt: skip
         del rip
-        if filter == "area" and (fill or guard_px > 0):
-            _point_guard(src, sgeo, dgeo, rot, fill, out, coverage, direct_alpha)
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
         # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
@@ -354,22 +357,6 @@ def _resample(
         pixel_type=envmap.pixel_type,
         levels=[o for o, _ in chain] if mips else None,
     )
-
-
-def _point_guard(src, sgeo, dgeo, rot, fill, out, coverage, direct_alpha) -> None:
-    """Give the area filter's guard and fill pixels (their centre outside the valid region) the
-    bilinear read at their centre's continued direction, as a GPU's filter across the edge
-    expects: the mean over such a pixel's footprint, which the continued map may stretch a
-    long way, is not. Their coverage (alpha) stays the area filter's."""
-    height, width, nch = out.shape
-    nch -= int(direct_alpha)
-    ring = np.zeros((height, width, nch), np.float32)
-    centre_valid = np.zeros((height, width), np.float32)
-    no_rips = np.zeros((1, 1, src.shape[2]), np.float32)
-    kernels.resample_rows(src, no_rips, 0, 0, sgeo, dgeo, 1.0, 1.0, 1, FILTERS["bilinear"], rot,
-                          fill, ring, centre_valid, None, zeroed=True)  # fmt: skip
-    outside = centre_valid == 0
-    out[:, :, :nch][outside] = ring[outside]
 
 
 def _level0_unused(
