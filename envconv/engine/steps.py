@@ -129,7 +129,7 @@ class Resample(Step):
     kind = "resample"
 
     def __init__(self, to: str, size: int | None = None, samples: int | str = "auto",
-                 filter: str = "area", alpha: bool = False, guard: int | str = 0,
+                 filter: str | None = None, alpha: bool = False, guard: int | str = 0,
                  mips: Any = None, rotate: Any = None, **options: Any) -> None:  # fmt: skip
         from ..resample.options import check_roughness, check_size
 

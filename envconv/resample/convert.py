@@ -61,6 +61,7 @@ from .options import (
     check_guard,
     check_mips,
     check_samples,
+    choose_filter,
     default_size,
     output_channels,
     output_layout,
@@ -78,7 +79,7 @@ def convert(
     to: Layout | str,
     size: int | None = None,
     samples: int | str | None = "auto",
-    filter: str = "area",
+    filter: str | None = None,
     rotate=None,
     guard: int | str = 0,
     alpha: bool = False,
@@ -111,8 +112,12 @@ def convert(
         ``"WxH"`` or (W, H).
     samples : int or "auto"
         Sub-samples per pixel edge S (S×S per pixel).
-    filter : {"bilinear", "bicubic", "nearest"}
-        Reconstruction filter for source reads.
+    filter : {"area", "bilinear", "bicubic", "nearest"}, optional
+        ``area``: each pixel the exact solid-angle mean of the box-reconstructed source over
+        its footprint (every texel's energy kept); the others read the source at sub-sample
+        points through that filter. Default: ``area``, or ``bilinear`` where the area filter
+        cannot make the result yet (a guard ring, a partial view or an octahedral or
+        equal-area square as input: :func:`envconv.resample.options.choose_filter`).
     rotate : "YAW,PITCH,ROLL" or 3 numbers, optional
         Rotation of the environment in degrees (see :mod:`envconv.layouts.rotation`).
     guard : int or "fill"
@@ -163,6 +168,7 @@ def convert(
     (128, 96, 3)
     """
     to, size = output_layout(envmap, to, size, fov, yaw, pitch, roll, out_convention, mips, guard)
+    filter = choose_filter(envmap, guard, filter)
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
@@ -172,11 +178,6 @@ def convert(
             from .partial import pad_partial
 
             envmap = pad_partial(envmap)
-            if filter == "area":
-                # The area filter does not yet stop exactly at a partial view's edge (its
-                # coverage reaches a few texels past it): a view is read by the point kernel.
-                log.info("partial view source: point-sampled with the bilinear filter")
-                options["filter"] = "bilinear"
         if _rim_to_mirror_ball(envmap, to, filter):
             envmap = convert(envmap, "latlong", size=round(1.5 * default_size(envmap, "latlong")),
                              in_convention=in_convention)  # fmt: skip
@@ -192,9 +193,6 @@ def convert(
 #: mirror ball, whose own rim is −Z too (a one-texel sun there moves by up to 1 %): such a
 #: conversion goes through an exact lat-long 1.5 times finer than the source at the horizon.
 RIM_SOURCES = ("sphere", "angular")
-#: Folded squares: the area filter takes them turned (any rotation, axes or convention matrix)
-#: through an exact lat-long 1.5 times finer at the horizon (see _resample).
-FOLDED_SOURCES = ("octahedral", "equal-area")
 
 
 def _rim_to_mirror_ball(envmap: EnvMap, to: Layout, filter: str) -> bool:
@@ -234,13 +232,6 @@ def _resample(
     guard_px = 0 if fill else check_guard(guard)
     if filter not in FILTERS:
         raise UsageError(f"unknown filter {filter!r}; choose one of {', '.join(FILTERS)}")
-    if filter == "area" and (fill or guard_px > 0):
-        # A guard ring holds what a GPU's filter reads across the edge: the texel on the
-        # other side (an octahedral map's mirrored border) or the continued direction's
-        # value, read at the pixel's centre. The area filter does not make those yet: a
-        # guarded map is point-sampled, as before it (docs/conventions.md, "Resampling").
-        log.info("guard ring: point-sampled with the bilinear filter")
-        filter = "bilinear"
     if size is None:
         size = default_size(envmap, to, cout, mips=_chain_request(mips, ggx), guard=guard)
     if not isinstance(size, (int, np.integer)) or size < 1:
@@ -264,12 +255,6 @@ def _resample(
     # Conventions (envconv.layouts.conventions): d_source = M_inᵀ Aᵀ Rᵀ M_out d.
     rot = cin.matrix.T @ environment_axes(up, axes).T @ rot @ cout.matrix
     rot = np.ascontiguousarray(rot)
-    if filter == "area" and envmap.layout.name in FOLDED_SOURCES and not np.allclose(rot, np.eye(3)):
-        # Turned, a folded square's footprints are not yet integrated right: go through an
-        # exact lat-long of the same environment (rot keeps its meaning: same directions).
-        flat_size = round(1.5 * default_size(envmap, "latlong"))
-        envmap = _resample(envmap, "latlong", flat_size, samples, filter, None, 0, False, None,
-                           None, False, None, None, None, None)  # fmt: skip
 
     width, height = to.image_size(size, guard_px)
     src = envmap.pixels
