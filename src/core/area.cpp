@@ -16,6 +16,7 @@
 
 #include "area.h"
 #include "area_prefix.h"
+#include "area_slopes.h"
 #include "area_slow.h"
 #include "area_tiles.h"
 #include "parallel.h"
@@ -88,22 +89,17 @@ void slow_block(const AreaJob& job, SlowPath& sp, PixelSums& sums, int64_t i0, i
 
 // Sink of green.h for the direct path: texels read as they are (a lat-long's columns modulo its
 // width), weighted by a lat-long or tennisball row's exact solid angle (kRows) or the density
-// model; NCH channels (0: sums.nch).
+// model, plus the slope terms m (ax Dx + ay Dy); NCH channels (0: sums.nch).
 template <bool kRows, int NCH>
 struct DirectSink {
-    static constexpr bool kMomentX = !kRows;
+    static constexpr bool kMomentX = true;
     const SourceModel& model;
     int64_t cell, row0, period;
     double sign;
     PixelSums& sums;
     double m = 0.0, g = 0.0;
-    // True when rows r0 ... r1 all hold a flat density model (no y moments needed).
-    bool flat(int64_t r0, int64_t r1) const {
-        if (!kRows) return false;
-        for (int64_t r = r0; r <= r1; ++r)
-            if (model.row_g[size_t(r - row0)] != 0.0) return false;
-        return true;
-    }
+    // The slope terms need the y moments everywhere.
+    bool flat(int64_t, int64_t) const { return false; }
     void row(int64_t iy) {
         if (kRows) {
             m = sign * model.row_m[size_t(iy - row0)];
@@ -111,20 +107,24 @@ struct DirectSink {
         }
     }
     void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
-        double w;
+        double w, lin;
         if (kRows) {
             w = m * area + g * dy;
+            lin = m;
         } else {
             TexelDensity t = model.texel(cell, ix, iy);
             w = sign * (t.m * area + t.gx * dx + t.gy * dy);
+            lin = sign * t.m;
         }
         if (period) {
             while (ix < 0) ix += period;
             while (ix >= period) ix -= period;
         }
         const int64_t nch = NCH ? NCH : sums.nch;
-        const float* v = model.image.data + (iy * model.image.width + ix) * nch;
-        for (int64_t c = 0; c < nch; ++c) sums.acc[c] += w * double(v[c]);
+        const int64_t at = (iy * model.image.width + ix) * nch;
+        const float *v = model.image.data + at, *sx = model.slope_x.data() + at, *sy = model.slope_y.data() + at;
+        const double lx = lin * dx, ly = lin * dy;
+        for (int64_t c = 0; c < nch; ++c) sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]);
         sums.weight += w;
     }
 };
@@ -329,7 +329,8 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     grad = false;
     for (int64_t r = r0; r <= r1; ++r) grad = grad || job.model.row_g[size_t(r - row_base)] != 0.0;
     int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
-    return ts.table.build(job.model.image, period, r0, r1, c0, c1);
+    return ts.table.build(job.model.image, job.model.slope_x.data(), job.model.slope_y.data(), period,
+                          r0, r1, c0, c1);
 }
 
 // True when every pixel of a lat-long or tennisball grid passes direct_quad: all corners
@@ -701,6 +702,7 @@ bool set_area_direct(bool allowed) { return direct_allowed.exchange(allowed); }
 void resample_area(const Image& src, const Conversion& cv, int samples, const ResampleOutput& out,
                    int threads, int64_t* progress) {
     SourceModel model(src, cv.src);
+    build_slopes(src, cv.src, threads, model.slope_x, model.slope_y);
     Singular sing = source_singular(cv);
     AreaJob job{cv, model, sing, out, samples};
     int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;

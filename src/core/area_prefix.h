@@ -21,31 +21,43 @@
 namespace envconv {
 
 // Running sums of a box of source rows: p[(r * (cols + 1) + c) * nch + ch] is the sum of
-// texels c0 ... c0 + c - 1 of row r0 + r (columns modulo `period` when it is not 0).
+// texels c0 ... c0 + c - 1 of row r0 + r (columns modulo `period` when it is not 0); ax, ay
+// at the same offsets hold the slopes of texel c0 + c (area_slopes.h; 0 in the last column).
 struct PrefixTable {
     int64_t r0 = 0, c0 = 0, rows = 0, cols = 0, nch = 0;
     std::vector<double> p;
+    std::vector<float> ax, ay;
 
-    // Fill the table for rows [r0, r1] and columns [c0, c1]; false when a texel is not finite
-    // (inf and NaN stay in the pixels that cover them: the per-texel path then). A row's last
-    // sums are finite only if all its texels are (or it overflowed: the other path too).
-    bool build(const Image& src, int64_t period, int64_t r0_, int64_t r1, int64_t c0_, int64_t c1) {
+    // Fill the table for rows [r0, r1] and columns [c0, c1] from the image and its slope planes
+    // sx, sy; false when a texel is not finite (inf and NaN stay in the pixels that cover them:
+    // the per-texel path then). A row's last sums are finite only if all its texels are (or it
+    // overflowed: the other path too).
+    bool build(const Image& src, const float* sx, const float* sy, int64_t period, int64_t r0_,
+               int64_t r1, int64_t c0_, int64_t c1) {
         r0 = r0_;
         c0 = c0_;
         rows = r1 - r0 + 1;
         cols = c1 - c0 + 1;
         nch = src.channels;
         size_t need = size_t(rows * (cols + 1) * nch);
-        if (p.size() < need) p.resize(need);  // grows to the largest table only: no refills
+        if (p.size() < need) {  // grows to the largest table only: no refills
+            p.resize(need);
+            ax.resize(need);
+            ay.resize(need);
+        }
         int64_t start = period ? ((c0 % period) + period) % period : c0;
         for (int64_t r = 0; r < rows; ++r) {
-            double* row = p.data() + r * (cols + 1) * nch;
+            const int64_t first = r * (cols + 1) * nch;
+            double* row = p.data() + first;
             for (int64_t ch = 0; ch < nch; ++ch) row[ch] = 0.0;
             // At most two runs of source columns: up to the wrap, then from column 0.
             int64_t done = 0, x = start;
             while (done < cols) {
                 int64_t run = period ? std::min(cols - done, period - x) : cols - done;
-                const float* v = src.texel(r0 + r, x);
+                const int64_t at = ((r0 + r) * src.width + x) * nch;
+                std::copy(sx + at, sx + at + run * nch, ax.begin() + first + done * nch);
+                std::copy(sy + at, sy + at + run * nch, ay.begin() + first + done * nch);
+                const float* v = src.data + at;
                 double* out = row + (done + 1) * nch;
                 if (nch == 3) {  // running sums in registers, not through the stored row
                     double a = out[-3], b = out[-2], c = out[-1];
@@ -60,52 +72,69 @@ struct PrefixTable {
                 done += run;
                 x = 0;
             }
-            for (int64_t ch = 0; ch < nch; ++ch)
+            for (int64_t ch = 0; ch < nch; ++ch) {
+                ax[size_t(first + cols * nch + ch)] = ay[size_t(first + cols * nch + ch)] = 0.0f;
                 if (!std::isfinite(row[cols * nch + ch])) return false;
+            }
         }
         return true;
     }
 };
 
-// Add the integral of Q dy along the edge (x0, y0) -> (x1, y1) (in texels (ix0, iy0) and
-// (ix1, iy1)) to out[0] (solid angle) and out[1 ...] (colour): the density of row r is
+// Add the integral of Q dy - P dx along the edge (x0, y0) -> (x1, y1) (in texels (ix0, iy0)
+// and (ix1, iy1)) to out[0] (solid angle) and out[1 ...] (colour): the density of row r is
 // m_r + g_r (y - r - 1/2), from model.row_m, row_g (rows relative to row_base). The edge lies
 // inside the table. The walk keeps the texel's place in the table and its row's density as it
 // steps, so that a piece costs a few multiplications per channel.
+//
+// In texel t, with u = x - ix and w = y - iy in [0, 1]: Q = rho(y) (S + s u) + m ax (u^2 - u) / 2
+// and P = m ay (w^2 - w) / 2, S the table's sum of s left of the texel. Their divergence is the
+// reconstruction times the density, its slope terms weighted by the row's mean density m (so
+// that over a whole texel they add nothing); P and the slope part of Q vanish on the texel's
+// sides, so that they need no running sums. Along a piece, u and w are linear: the means of
+// u, (u^2 - u) / 2, (w^2 - w) / 2 (and u (y - iy - 1/2) for the density's slope) are closed.
 template <int NCH, bool kGrad>
 void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_base, double x0,
                    double y0, int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1,
                    int64_t iy1, double* out) {
     const double dx = x1 - x0, dy = y1 - y0;
-    if (dy == 0.0) return;
+    if (dy == 0.0 && dx == 0.0) return;
     const int64_t nch = NCH ? NCH : t.nch, row_stride = (t.cols + 1) * nch;
     int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
     const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
     double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);
     double tx = steps_x ? (line_x - x0) / dx : 2.0, ty = steps_y ? (line_y - y0) / dy : 2.0;
-    const double step_tx = steps_x ? double(sx) / dx : 0.0, step_ty = double(sy) / dy;
-    const double* pr = t.p.data() + ((iy0 - t.r0) * (t.cols + 1) + (ix0 - t.c0)) * nch;
+    const double step_tx = steps_x ? double(sx) / dx : 0.0, step_ty = steps_y ? double(sy) / dy : 0.0;
+    int64_t at = ((iy0 - t.r0) * (t.cols + 1) + (ix0 - t.c0)) * nch;
     const double* row_m = model.row_m.data() - row_base;
     const double* row_g = model.row_g.data() - row_base;
     int64_t r = iy0;
-    double m = row_m[r], g = kGrad ? row_g[r] : 0.0, mid = double(r) + 0.5;
+    double m = row_m[r], g = kGrad ? row_g[r] : 0.0, top = double(r);
     double base_x = double(ix0), col = double(ix0 - t.c0);
     double local[1 + (NCH ? NCH : 8)] = {};
     double* sum = NCH || nch <= 8 ? local : out;
     auto piece = [&](double px, double py, double qx, double qy) {
+        const double *pr = t.p.data() + at;
+        const float *ax = t.ax.data() + at, *ay = t.ay.data() + at;
         double ey = qy - py, up = px - base_x, uq = qx - base_x, ubar = 0.5 * (up + uq);
+        double wp = py - top, wq = qy - top;
+        double uu = (up * up + up * uq + uq * uq) * (1.0 / 6.0) - 0.5 * ubar;
+        double ww = (wp * wp + wp * wq + wq * wq) * (1.0 / 6.0) - 0.25 * (wp + wq);
+        double em = ey * m, emx = em * uu, emy = (qx - px) * m * ww;
         if (!kGrad) {
-            double em = ey * m;
             sum[0] += em * (col + ubar);
-            for (int64_t ch = 0; ch < nch; ++ch) sum[1 + ch] += em * (pr[ch] + (pr[nch + ch] - pr[ch]) * ubar);
+            for (int64_t ch = 0; ch < nch; ++ch)
+                sum[1 + ch] += em * (pr[ch] + (pr[nch + ch] - pr[ch]) * ubar) + emx * double(ax[ch]) -
+                               emy * double(ay[ch]);
             return;
         }
-        double vp = py - mid, vq = qy - mid, vbar = 0.5 * (vp + vq);
+        double vp = wp - 0.5, vq = wq - 0.5, vbar = 0.5 * (vp + vq);
         double uv = (up * (2.0 * vp + vq) + uq * (vp + 2.0 * vq)) * (1.0 / 6.0);
         sum[0] += ey * (m * (col + ubar) + g * (col * vbar + uv));
         for (int64_t ch = 0; ch < nch; ++ch) {
             double b = pr[ch], s = pr[nch + ch] - b;
-            sum[1 + ch] += ey * (m * (b + s * ubar) + g * (b * vbar + s * uv));
+            sum[1 + ch] += ey * (m * (b + s * ubar) + g * (b * vbar + s * uv)) + emx * double(ax[ch]) -
+                           emy * double(ay[ch]);
         }
     };
     // Which line comes next is as good as random: the steps are selects, not branches.
@@ -118,13 +147,13 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
         piece(px, py, qx, qy);
         px = qx;
         py = qy;
-        pr += across_x ? step_cx : step_cy;
+        at += across_x ? step_cx : step_cy;
         const double shift_x = across_x ? double(sx) : 0.0, shift_y = across_x ? 0.0 : double(sy);
         base_x += shift_x;
         col += shift_x;
         line_x += shift_x;
         r += across_x ? 0 : sy;
-        mid += shift_y;
+        top += shift_y;
         line_y += shift_y;
         m = row_m[r];
         if (kGrad) g = row_g[r];

@@ -71,7 +71,8 @@ struct SlowPath {
 };
 
 // Sink of green.h: solid angle of each texel's piece (the texel's density model) and its
-// colour, read through area_texel.
+// colour, read through area_texel: s times the solid angle plus the slope terms, m (ax Dx +
+// ay Dy) (area_slopes.h; none for a texel read in another's place).
 struct TexelSink {
     static constexpr bool kMomentX = true;
     const SourceModel& model;
@@ -84,9 +85,18 @@ struct TexelSink {
         TexelDensity t = model.texel(cell, ix, iy);
         double w = sign * (t.m * area + t.gx * dx + t.gy * dy);
         if (w == 0.0) return;
-        const float* v = area_texel(model.image, model.g, cell, ix, iy);
-        for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
+        bool own;
+        const float* v = area_texel(model.image, model.g, cell, ix, iy, &own);
         sums.weight += w;
+        if (!own || model.slope_x.empty()) {
+            for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
+            return;
+        }
+        const int64_t at = v - model.image.data;
+        const float *sx = model.slope_x.data() + at, *sy = model.slope_y.data() + at;
+        const double lx = sign * t.m * dx, ly = sign * t.m * dy;
+        for (int64_t c = 0; c < sums.nch; ++c)
+            sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]);
     }
 };
 

@@ -188,6 +188,8 @@ struct SourceModel {
     const Geometry& g;
     std::vector<double> row_m, row_g;  // lat-long / tennisball: per image row
     double area;                       // (a, b) area of one texel
+    // Slopes of the linear reconstruction (area_slopes.h) at the image's offsets; empty: the box.
+    std::vector<float> slope_x, slope_y;
 
     SourceModel(const Image& image_, const Geometry& g_) : image(image_), g(g_) {
         area = (2.0 / double(g.nx)) * (2.0 / double(g.n));
@@ -261,8 +263,10 @@ inline bool area_readable(const Geometry& g, int64_t cell, int64_t ix, int64_t i
 // The texel the area filter reads for texel (ix, iy) of `cell`'s continued grid: itself where
 // readable; a lat-long column past the wrap, modulo the width; anything else, the texel that
 // holds the continued direction of its centre (remap_tap).
+// *own (when given) tells whether it is the texel itself (false: another, in its own frame).
 inline const float* area_texel(const Image& src, const Geometry& g, int64_t cell, int64_t ix,
-                               int64_t iy) {
+                               int64_t iy, bool* own = nullptr) {
+    if (own) *own = true;
     if (g.family == kLatlong && g.guard == 0 && iy >= 0 && iy < g.n) {
         int64_t w = 2 * g.n;
         ix %= w;
@@ -270,6 +274,7 @@ inline const float* area_texel(const Image& src, const Geometry& g, int64_t cell
         return src.texel(iy, ix);
     }
     if (area_readable(g, cell, ix, iy)) return src.texel(iy, ix);
+    if (own) *own = false;
     int64_t jx, jy;
     remap_tap(g, cell, ix, iy, jx, jy);
     return src.texel(jy, jx);

@@ -1,0 +1,141 @@
+// Slopes of the area filter's piecewise-linear reconstruction of the source.
+//
+// Inside texel t (centre (cx, cy), level-0 image pixels, y down as stored) the source is
+// f(x, y) = s_t + ax_t (x - cx) + ay_t (y - cy): ax, ay in colour per texel, per channel. They
+// are central differences of the texel's four neighbours, scaled down together (per channel)
+// until the texel's corners, s +- (|ax| + |ay|) / 2, stay within the minimum and maximum of
+// the texel and its neighbours (a Barth-Jespersen limiter): the reconstruction never leaves
+// that range, so no negative value and no overshoot next to an HDR sun, and a linear ramp is
+// kept as it is. The slope along an axis is 0 (the box) where a neighbour on it is not in the
+// texel's own cell's valid region (cell edges, a disk's rim), and both are 0 in a lat-long's
+// pole rows and wherever a texel or neighbour is not finite (or the slopes overflow).
+//
+// The planes x, y hold ax and ay at the same offsets as the image holds s.
+#pragma once
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "area_source.h"
+#include "parallel.h"
+
+namespace envconv {
+
+namespace slope_detail {
+
+// The limited slopes of one channel: s the texel, (l, r) its neighbours along x, (t, b) along
+// y (with hx, hy false: none, that axis' slope is 0 and its neighbours bound nothing).
+inline void limit(float s, float l, float r, float t, float b, bool hx, bool hy, float& ax,
+                  float& ay) {
+    ax = hx ? 0.5f * (r - l) : 0.0f;
+    ay = hy ? 0.5f * (b - t) : 0.0f;
+    float hi = s, lo = s;
+    if (hx) {
+        hi = std::max(hi, std::max(l, r));
+        lo = std::min(lo, std::min(l, r));
+    }
+    if (hy) {
+        hi = std::max(hi, std::max(t, b));
+        lo = std::min(lo, std::min(t, b));
+    }
+    float room = std::min(hi - s, s - lo), d = 0.5f * (std::fabs(ax) + std::fabs(ay));
+    float k = std::min(1.0f, room / std::max(d, FLT_MIN));
+    ax *= k;
+    ay *= k;
+    bool ok = std::fabs(s) <= FLT_MAX && std::fabs(ax) <= FLT_MAX && std::fabs(ay) <= FLT_MAX;
+    ax = ok ? ax : 0.0f;
+    ay = ok ? ay : 0.0f;
+}
+
+// limit() over n consecutive floats whose neighbours are all there: v[k -+ xs] along x,
+// v[k -+ ys] along y (branch-free, so that it vectorises).
+inline void run(const float* v, int64_t n, int64_t xs, int64_t ys, float* __restrict ox,
+                float* __restrict oy) {
+    const float *vl = v - xs, *vr = v + xs, *vt = v - ys, *vb = v + ys;
+    for (int64_t k = 0; k < n; ++k) {
+        float s = v[k], l = vl[k], r = vr[k], t = vt[k], b = vb[k];
+        float ax = 0.5f * (r - l), ay = 0.5f * (b - t);
+        float hi = std::max(std::max(std::max(l, r), std::max(t, b)), s);
+        float lo = std::min(std::min(std::min(l, r), std::min(t, b)), s);
+        float room = std::min(hi - s, s - lo), d = 0.5f * (std::fabs(ax) + std::fabs(ay));
+        float q = std::min(1.0f, room / std::max(d, FLT_MIN));
+        ax *= q;
+        ay *= q;
+        bool ok = std::fabs(s) <= FLT_MAX && std::fabs(ax) <= FLT_MAX && std::fabs(ay) <= FLT_MAX;
+        ox[k] = ok ? ax : 0.0f;
+        oy[k] = ok ? ay : 0.0f;
+    }
+}
+
+// True when texel (ix, iy) is a neighbour the slopes of `cell`'s texels may use; ix wraps
+// in a lat-long.
+inline bool usable(const Geometry& g, int64_t cell, int64_t& ix, int64_t iy) {
+    if (g.family == kLatlong && g.guard == 0) {
+        if (iy < 0 || iy >= g.n) return false;
+        int64_t w = 2 * g.n;
+        ix = ((ix % w) + w) % w;
+        return true;
+    }
+    return area_readable(g, cell, ix, iy);
+}
+
+// The slopes of texel (ix, iy) of `cell` (readable), each neighbour checked.
+inline void texel(const Image& img, const Geometry& g, int64_t cell, int64_t ix, int64_t iy,
+                  float* sx, float* sy) {
+    const int64_t nch = img.channels, at = (iy * img.width + ix) * nch;
+    int64_t lx = ix - 1, rx = ix + 1, tx = ix, bx = ix;
+    bool hx = usable(g, cell, lx, iy) && usable(g, cell, rx, iy);
+    bool hy = usable(g, cell, tx, iy - 1) && usable(g, cell, bx, iy + 1);
+    const float* s = img.data + at;
+    for (int64_t c = 0; c < nch; ++c) {
+        float l = hx ? img.texel(iy, lx)[c] : 0.0f, r = hx ? img.texel(iy, rx)[c] : 0.0f;
+        float t = hy ? img.texel(iy - 1, tx)[c] : 0.0f, b = hy ? img.texel(iy + 1, bx)[c] : 0.0f;
+        limit(s[c], l, r, t, b, hx, hy, sx[at + c], sy[at + c]);
+    }
+}
+
+// The slopes of image row iy (sx, sy already zero outside the valid regions).
+inline void row(const Image& img, const Geometry& g, int64_t iy, float* sx, float* sy) {
+    const int64_t cw = g.cell_width(), ch = g.cell_height(), nch = img.channels;
+    const int64_t band = iy / ch, y0 = band * ch + g.guard;
+    if (iy < y0 || iy >= y0 + g.n) return;
+    const bool pole = g.family == kLatlong && (iy == y0 || iy == y0 + g.n - 1);
+    if (pole) return;  // a lat-long's pole rows: the box
+    const bool inner_rows = iy > y0 && iy < y0 + g.n - 1 && !g.disk();
+    for (int64_t col = 0; col < g.columns; ++col) {
+        const int64_t cell = band * g.columns + col;
+        if (g.cell_face[cell] < 0) continue;
+        const int64_t x0 = col * cw + g.guard, x1 = x0 + g.nx;
+        if (inner_rows && g.nx > 2) {  // the inner columns at once, the two edges checked
+            const int64_t at = (iy * img.width + x0 + 1) * nch;
+            run(img.data + at, (g.nx - 2) * nch, nch, img.width * nch, sx + at, sy + at);
+            texel(img, g, cell, x0, iy, sx, sy);
+            texel(img, g, cell, x1 - 1, iy, sx, sy);
+            continue;
+        }
+        for (int64_t x = x0; x < x1; ++x)
+            if (area_readable(g, cell, x, iy)) texel(img, g, cell, x, iy, sx, sy);
+    }
+}
+
+}  // namespace slope_detail
+
+// Fill sx, sy (as large as the image) with the slopes of every texel (0 outside the valid
+// regions), rows in parallel.
+inline void build_slopes(const Image& img, const Geometry& g, int threads, std::vector<float>& sx,
+                         std::vector<float>& sy) {
+    const size_t size = size_t(img.height * img.width * img.channels);
+    sx.assign(size, 0.0f);
+    sy.assign(size, 0.0f);
+    constexpr int64_t kRows = 16;
+    parallel_for((img.height + kRows - 1) / kRows, threads, [&](int64_t task) {
+        int64_t end = std::min(img.height, (task + 1) * kRows);
+        for (int64_t iy = task * kRows; iy < end; ++iy)
+            slope_detail::row(img, g, iy, sx.data(), sy.data());
+    });
+}
+
+}  // namespace envconv
