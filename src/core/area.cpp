@@ -13,6 +13,7 @@
 #include <atomic>
 #include <cmath>
 #include <vector>
+#include <cstdlib>
 
 #include "area.h"
 #include "area_prefix.h"
@@ -89,7 +90,7 @@ void slow_block(const AreaJob& job, SlowPath& sp, PixelSums& sums, int64_t i0, i
 
 // Sink of green.h for the direct path: texels read as they are (a lat-long's columns modulo its
 // width), weighted by a lat-long or tennisball row's exact solid angle (kRows) or the density
-// model, plus the slope terms m (ax Dx + ay Dy); NCH channels (0: sums.nch).
+// model, plus the slope terms c (ax Dx + ay Dy) (slope_weight); NCH channels (0: sums.nch).
 template <bool kRows, int NCH>
 struct DirectSink {
     static constexpr bool kMomentX = true;
@@ -97,24 +98,25 @@ struct DirectSink {
     int64_t cell, row0, period;
     double sign;
     PixelSums& sums;
-    double m = 0.0, g = 0.0;
+    double m = 0.0, g = 0.0, c = 0.0;
     // The slope terms need the y moments everywhere.
     bool flat(int64_t, int64_t) const { return false; }
     void row(int64_t iy) {
         if (kRows) {
             m = sign * model.row_m[size_t(iy - row0)];
             g = sign * model.row_g[size_t(iy - row0)];
+            c = sign * slope_weight(model.row_m[size_t(iy - row0)], 0.0, model.row_g[size_t(iy - row0)]);
         }
     }
     void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
         double w, lin;
         if (kRows) {
             w = m * area + g * dy;
-            lin = m;
+            lin = c;
         } else {
             TexelDensity t = model.texel(cell, ix, iy);
             w = sign * (t.m * area + t.gx * dx + t.gy * dy);
-            lin = sign * t.m;
+            lin = sign * slope_weight(t);
         }
         if (period) {
             while (ix < 0) ix += period;
@@ -703,6 +705,7 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
                    int threads, int64_t* progress) {
     SourceModel model(src, cv.src);
     build_slopes(src, cv.src, threads, model.slope_x, model.slope_y);
+    if (getenv("ENVCONV_BOX")) { std::fill(model.slope_x.begin(), model.slope_x.end(), 0.0f); std::fill(model.slope_y.begin(), model.slope_y.end(), 0.0f); }  // TEMP
     Singular sing = source_singular(cv);
     AreaJob job{cv, model, sing, out, samples};
     int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;

@@ -87,11 +87,11 @@ struct PrefixTable {
 // inside the table. The walk keeps the texel's place in the table and its row's density as it
 // steps, so that a piece costs a few multiplications per channel.
 //
-// In texel t, with u = x - ix and w = y - iy in [0, 1]: Q = rho(y) (S + s u) + m ax (u^2 - u) / 2
-// and P = m ay (w^2 - w) / 2, S the table's sum of s left of the texel. Their divergence is the
-// reconstruction times the density, its slope terms weighted by the row's mean density m (so
-// that over a whole texel they add nothing); P and the slope part of Q vanish on the texel's
-// sides, so that they need no running sums. Along a piece, u and w are linear: the means of
+// In texel t, with u = x - ix and w = y - iy in [0, 1]: Q = rho(y) (S + s u) + c ax (u^2 - u) / 2
+// and P = c ay (w^2 - w) / 2, S the table's sum of s left of the texel. Their divergence is
+// the reconstruction times the density, its slope terms weighted by the row's least density c
+// (slope_weight: over a whole texel they add nothing); P and the slope part of Q vanish on the
+// texel's sides, so that they need no running sums. Along a piece, u and w are linear: the means of
 // u, (u^2 - u) / 2, (w^2 - w) / 2 (and u (y - iy - 1/2) for the density's slope) are closed.
 template <int NCH, bool kGrad>
 void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_base, double x0,
@@ -110,6 +110,7 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     const double* row_g = model.row_g.data() - row_base;
     int64_t r = iy0;
     double m = row_m[r], g = kGrad ? row_g[r] : 0.0, top = double(r);
+    double c = kGrad ? slope_weight(m, 0.0, g) : m;
     double base_x = double(ix0), col = double(ix0 - t.c0);
     double local[1 + (NCH ? NCH : 8)] = {};
     double* sum = NCH || nch <= 8 ? local : out;
@@ -120,7 +121,7 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
         double wp = py - top, wq = qy - top;
         double uu = (up * up + up * uq + uq * uq) * (1.0 / 6.0) - 0.5 * ubar;
         double ww = (wp * wp + wp * wq + wq * wq) * (1.0 / 6.0) - 0.25 * (wp + wq);
-        double em = ey * m, emx = em * uu, emy = (qx - px) * m * ww;
+        double em = ey * m, emx = ey * c * uu, emy = (qx - px) * c * ww;
         if (!kGrad) {
             sum[0] += em * (col + ubar);
             for (int64_t ch = 0; ch < nch; ++ch)
@@ -156,7 +157,12 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
         top += shift_y;
         line_y += shift_y;
         m = row_m[r];
-        if (kGrad) g = row_g[r];
+        if (kGrad) {
+            g = row_g[r];
+            c = slope_weight(m, 0.0, g);
+        } else {
+            c = m;
+        }
         steps_x -= across_x;
         steps_y -= !across_x;
         tx = across_x ? (steps_x ? tx + step_tx : 2.0) : tx;

@@ -26,6 +26,10 @@ namespace envconv {
 
 namespace slope_detail {
 
+// A limited slope is scaled a few float roundings short of its bound, so that the corners
+// stay within range as they are computed, not only in exact arithmetic.
+constexpr float kShrink = 1.0f - 8.0f * FLT_EPSILON;
+
 // The limited slopes of one channel: s the texel, (l, r) its neighbours along x, (t, b) along
 // y (with hx, hy false: none, that axis' slope is 0 and its neighbours bound nothing).
 inline void limit(float s, float l, float r, float t, float b, bool hx, bool hy, float& ax,
@@ -42,7 +46,7 @@ inline void limit(float s, float l, float r, float t, float b, bool hx, bool hy,
         lo = std::min(lo, std::min(t, b));
     }
     float room = std::min(hi - s, s - lo), d = 0.5f * (std::fabs(ax) + std::fabs(ay));
-    float k = std::min(1.0f, room / std::max(d, FLT_MIN));
+    float k = room < d ? room / d * kShrink : 1.0f;
     ax *= k;
     ay *= k;
     bool ok = std::fabs(s) <= FLT_MAX && std::fabs(ax) <= FLT_MAX && std::fabs(ay) <= FLT_MAX;
@@ -61,7 +65,7 @@ inline void run(const float* v, int64_t n, int64_t xs, int64_t ys, float* __rest
         float hi = std::max(std::max(std::max(l, r), std::max(t, b)), s);
         float lo = std::min(std::min(std::min(l, r), std::min(t, b)), s);
         float room = std::min(hi - s, s - lo), d = 0.5f * (std::fabs(ax) + std::fabs(ay));
-        float q = std::min(1.0f, room / std::max(d, FLT_MIN));
+        float q = room < d ? room / std::max(d, FLT_MIN) * kShrink : 1.0f;
         ax *= q;
         ay *= q;
         bool ok = std::fabs(s) <= FLT_MAX && std::fabs(ax) <= FLT_MAX && std::fabs(ay) <= FLT_MAX;

@@ -71,8 +71,8 @@ struct SlowPath {
 };
 
 // Sink of green.h: solid angle of each texel's piece (the texel's density model) and its
-// colour, read through area_texel: s times the solid angle plus the slope terms, m (ax Dx +
-// ay Dy) (area_slopes.h; none for a texel read in another's place).
+// colour, read through area_texel: s times the solid angle plus the slope terms, c (ax Dx +
+// ay Dy) (area_slopes.h, slope_weight; none for a texel read in another's place).
 struct TexelSink {
     static constexpr bool kMomentX = true;
     const SourceModel& model;
@@ -94,7 +94,7 @@ struct TexelSink {
         }
         const int64_t at = v - model.image.data;
         const float *sx = model.slope_x.data() + at, *sy = model.slope_y.data() + at;
-        const double lx = sign * t.m * dx, ly = sign * t.m * dy;
+        const double c = sign * slope_weight(t), lx = c * dx, ly = c * dy;
         for (int64_t c = 0; c < sums.nch; ++c)
             sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]);
     }

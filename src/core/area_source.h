@@ -15,6 +15,7 @@
 // however the texel is cut: the area filter hands every texel's solid angle out exactly once.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -244,6 +245,15 @@ struct SourceModel {
         return {m * area, gx * area, gy * area};
     }
 };
+
+// The density the slope terms of the linear reconstruction are weighted by (area_slopes.h):
+// the model's least value over the texel (0 if it goes negative). Any constant integrates
+// the slopes to 0 over the whole texel; the least one keeps rho s + c (ax (x - cx) +
+// ay (y - cy)) between rho times the least and the greatest value of the reconstruction.
+inline double slope_weight(double m, double gx, double gy) {
+    return std::max(0.0, m - 0.5 * (std::fabs(gx) + std::fabs(gy)));
+}
+inline double slope_weight(const TexelDensity& t) { return slope_weight(t.m, t.gx, t.gy); }
 
 // True when texel (ix, iy) of `cell`'s grid holds data the area filter reads as it is: inside
 // the cell's valid region (the face, not its guard ring), or for a disk, a texel whose square
