@@ -13,7 +13,6 @@
 #include <atomic>
 #include <cmath>
 #include <vector>
-#include <cstdlib>
 
 #include "area.h"
 #include "area_prefix.h"
@@ -705,7 +704,6 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
                    int threads, int64_t* progress) {
     SourceModel model(src, cv.src);
     build_slopes(src, cv.src, threads, model.slope_x, model.slope_y);
-    if (getenv("ENVCONV_BOX")) { std::fill(model.slope_x.begin(), model.slope_x.end(), 0.0f); std::fill(model.slope_y.begin(), model.slope_y.end(), 0.0f); }  // TEMP
     Singular sing = source_singular(cv);
     AreaJob job{cv, model, sing, out, samples};
     int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;

@@ -13,6 +13,7 @@
 
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "area_source.h"
@@ -20,13 +21,20 @@
 
 namespace envconv {
 
-// Running sums of a box of source rows: p[(r * (cols + 1) + c) * nch + ch] is the sum of
-// texels c0 ... c0 + c - 1 of row r0 + r (columns modulo `period` when it is not 0); ax, ay
-// at the same offsets hold the slopes of texel c0 + c (area_slopes.h; 0 in the last column).
+// Two doubles as one SSE2 register (GCC and Clang vector extensions).
+typedef double v2d __attribute__((vector_size(16)));
+inline v2d load2(const double* p) {
+    v2d v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+}
+
+// Running sums of a box of source rows, entry (r, c) at p[(r * (cols + 1) + c) * 3 nch]: the
+// sum of texels c0 ... c0 + c - 1 of row r0 + r (nch values; columns modulo `period` when it is
+// not 0), then the slopes ax and ay of texel c0 + c (area_slopes.h; 0 in the last entry).
 struct PrefixTable {
     int64_t r0 = 0, c0 = 0, rows = 0, cols = 0, nch = 0;
     std::vector<double> p;
-    std::vector<float> ax, ay;
 
     // Fill the table for rows [r0, r1] and columns [c0, c1] from the image and its slope planes
     // sx, sy; false when a texel is not finite (inf and NaN stay in the pixels that cover them:
@@ -39,42 +47,49 @@ struct PrefixTable {
         rows = r1 - r0 + 1;
         cols = c1 - c0 + 1;
         nch = src.channels;
-        size_t need = size_t(rows * (cols + 1) * nch);
-        if (p.size() < need) {  // grows to the largest table only: no refills
-            p.resize(need);
-            ax.resize(need);
-            ay.resize(need);
-        }
+        const int64_t e = 3 * nch;
+        size_t need = size_t(rows * (cols + 1) * e);
+        if (p.size() < need) p.resize(need);  // grows to the largest table only: no refills
         int64_t start = period ? ((c0 % period) + period) % period : c0;
         for (int64_t r = 0; r < rows; ++r) {
-            const int64_t first = r * (cols + 1) * nch;
-            double* row = p.data() + first;
+            double* row = p.data() + r * (cols + 1) * e;
             for (int64_t ch = 0; ch < nch; ++ch) row[ch] = 0.0;
             // At most two runs of source columns: up to the wrap, then from column 0.
             int64_t done = 0, x = start;
             while (done < cols) {
                 int64_t run = period ? std::min(cols - done, period - x) : cols - done;
                 const int64_t at = ((r0 + r) * src.width + x) * nch;
-                std::copy(sx + at, sx + at + run * nch, ax.begin() + first + done * nch);
-                std::copy(sy + at, sy + at + run * nch, ay.begin() + first + done * nch);
-                const float* v = src.data + at;
-                double* out = row + (done + 1) * nch;
+                const float *v = src.data + at, *ax = sx + at, *ay = sy + at;
+                double* out = row + done * e;
                 if (nch == 3) {  // running sums in registers, not through the stored row
-                    double a = out[-3], b = out[-2], c = out[-1];
-                    for (int64_t k = 0; k < run; ++k, v += 3, out += 3) {
-                        out[0] = a += double(v[0]);
-                        out[1] = b += double(v[1]);
-                        out[2] = c += double(v[2]);
+                    double a = out[0], b = out[1], c = out[2];
+                    for (int64_t k = 0; k < run; ++k, v += 3, ax += 3, ay += 3, out += 9) {
+                        out[3] = double(ax[0]);
+                        out[4] = double(ax[1]);
+                        out[5] = double(ax[2]);
+                        out[6] = double(ay[0]);
+                        out[7] = double(ay[1]);
+                        out[8] = double(ay[2]);
+                        out[9] = a += double(v[0]);
+                        out[10] = b += double(v[1]);
+                        out[11] = c += double(v[2]);
                     }
                 } else {
-                    for (int64_t k = 0; k < run * nch; ++k) out[k] = out[k - nch] + double(v[k]);
+                    for (int64_t k = 0; k < run; ++k, v += nch, ax += nch, ay += nch, out += e) {
+                        for (int64_t ch = 0; ch < nch; ++ch) {
+                            out[nch + ch] = double(ax[ch]);
+                            out[2 * nch + ch] = double(ay[ch]);
+                            out[e + ch] = out[ch] + double(v[ch]);
+                        }
+                    }
                 }
                 done += run;
                 x = 0;
             }
+            double* last = row + cols * e;
             for (int64_t ch = 0; ch < nch; ++ch) {
-                ax[size_t(first + cols * nch + ch)] = ay[size_t(first + cols * nch + ch)] = 0.0f;
-                if (!std::isfinite(row[cols * nch + ch])) return false;
+                last[nch + ch] = last[2 * nch + ch] = 0.0;
+                if (!std::isfinite(last[ch])) return false;
             }
         }
         return true;
@@ -99,13 +114,13 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
                    int64_t iy1, double* out) {
     const double dx = x1 - x0, dy = y1 - y0;
     if (dy == 0.0 && dx == 0.0) return;
-    const int64_t nch = NCH ? NCH : t.nch, row_stride = (t.cols + 1) * nch;
+    const int64_t nch = NCH ? NCH : t.nch, e = 3 * nch, row_stride = (t.cols + 1) * e;
     int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
     const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
     double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);
     double tx = steps_x ? (line_x - x0) / dx : 2.0, ty = steps_y ? (line_y - y0) / dy : 2.0;
     const double step_tx = steps_x ? double(sx) / dx : 0.0, step_ty = steps_y ? double(sy) / dy : 0.0;
-    int64_t at = ((iy0 - t.r0) * (t.cols + 1) + (ix0 - t.c0)) * nch;
+    int64_t at = ((iy0 - t.r0) * (t.cols + 1) + (ix0 - t.c0)) * e;
     const double* row_m = model.row_m.data() - row_base;
     const double* row_g = model.row_g.data() - row_base;
     int64_t r = iy0;
@@ -114,33 +129,36 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     double base_x = double(ix0), col = double(ix0 - t.c0);
     double local[1 + (NCH ? NCH : 8)] = {};
     double* sum = NCH || nch <= 8 ? local : out;
+    v2d sum01 = {0.0, 0.0};  // three channels: the first two as a pair
     auto piece = [&](double px, double py, double qx, double qy) {
-        const double *pr = t.p.data() + at;
-        const float *ax = t.ax.data() + at, *ay = t.ay.data() + at;
+        const double* pr = t.p.data() + at;  // S, then ax, ay, then the next texel's S
         double ey = qy - py, up = px - base_x, uq = qx - base_x, ubar = 0.5 * (up + uq);
         double wp = py - top, wq = qy - top;
         double uu = (up * up + up * uq + uq * uq) * (1.0 / 6.0) - 0.5 * ubar;
         double ww = (wp * wp + wp * wq + wq * wq) * (1.0 / 6.0) - 0.25 * (wp + wq);
-        double em = ey * m, emx = ey * c * uu, emy = (qx - px) * c * ww;
-        if (!kGrad) {
-            sum[0] += em * (col + ubar);
-            for (int64_t ch = 0; ch < nch; ++ch)
-                sum[1 + ch] += em * (pr[ch] + (pr[nch + ch] - pr[ch]) * ubar) + emx * double(ax[ch]) -
-                               emy * double(ay[ch]);
+        double em = ey * m, emx = ey * c * uu, emy = (px - qx) * c * ww;
+        // The colour is cb S + cn S' + emx ax + emy ay per channel (S' the next texel's sum).
+        double cn = em * ubar, cb = em - cn;
+        if (kGrad) {
+            double vp = wp - 0.5, vq = wq - 0.5, vbar = 0.5 * (vp + vq);
+            double uv = (up * (2.0 * vp + vq) + uq * (vp + 2.0 * vq)) * (1.0 / 6.0);
+            sum[0] += em * col + cn + ey * g * (col * vbar + uv);
+            cb += ey * g * (vbar - uv);
+            cn += ey * g * uv;
+        } else {
+            sum[0] += em * col + cn;
+        }
+        if (NCH == 3) {
+            sum01 += cb * load2(pr) + cn * load2(pr + 9) + emx * load2(pr + 3) + emy * load2(pr + 6);
+            sum[3] += cb * pr[2] + cn * pr[11] + emx * pr[5] + emy * pr[8];
             return;
         }
-        double vp = wp - 0.5, vq = wq - 0.5, vbar = 0.5 * (vp + vq);
-        double uv = (up * (2.0 * vp + vq) + uq * (vp + 2.0 * vq)) * (1.0 / 6.0);
-        sum[0] += ey * (m * (col + ubar) + g * (col * vbar + uv));
-        for (int64_t ch = 0; ch < nch; ++ch) {
-            double b = pr[ch], s = pr[nch + ch] - b;
-            sum[1 + ch] += ey * (m * (b + s * ubar) + g * (b * vbar + s * uv)) + emx * double(ax[ch]) -
-                           emy * double(ay[ch]);
-        }
+        for (int64_t ch = 0; ch < nch; ++ch)
+            sum[1 + ch] += cb * pr[ch] + cn * pr[e + ch] + emx * pr[nch + ch] + emy * pr[2 * nch + ch];
     };
     // Which line comes next is as good as random: the steps are selects, not branches.
     double px = x0, py = y0;
-    const int64_t step_cx = sx * nch, step_cy = sy * row_stride;
+    const int64_t step_cx = sx * e, step_cy = sy * row_stride;
     for (int left = steps_x + steps_y; left > 0; --left) {
         const bool across_x = tx < ty;
         const double qx = across_x ? line_x : x0 + ty * dx;
@@ -169,6 +187,8 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
         ty = across_x ? ty : (steps_y ? ty + step_ty : 2.0);
     }
     piece(px, py, x1, y1);
+    sum[1] += sum01[0];
+    sum[2] += sum01[1];
     if (sum != out) {
         for (int64_t c = 0; c <= nch; ++c) out[c] += sum[c];
     }
