@@ -126,22 +126,23 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     int64_t r = iy0;
     double m = row_m[r], g = kGrad ? row_g[r] : 0.0, top = double(r);
     double c = kGrad ? slope_weight(m, 0.0, g) : m;
-    double base_x = double(ix0), col = double(ix0 - t.c0);
+    double base_x = double(ix0);
+    const double first_col = double(t.c0);
     double local[1 + (NCH ? NCH : 8)] = {};
     double* sum = NCH || nch <= 8 ? local : out;
     v2d sum01 = {0.0, 0.0};  // three channels: the first two as a pair
     auto piece = [&](double px, double py, double qx, double qy) {
         const double* pr = t.p.data() + at;  // S, then ax, ay, then the next texel's S
-        double ey = qy - py, up = px - base_x, uq = qx - base_x, ubar = 0.5 * (up + uq);
-        double wp = py - top, wq = qy - top;
-        double uu = (up * up + up * uq + uq * uq) * (1.0 / 6.0) - 0.5 * ubar;
-        double ww = (wp * wp + wp * wq + wq * wq) * (1.0 / 6.0) - 0.25 * (wp + wq);
-        double em = ey * m, emx = ey * c * uu, emy = (px - qx) * c * ww;
+        // Means along the piece of u, (u^2 - u) / 2 and (w^2 - w) / 2 (u, w linear along it).
+        double ex = qx - px, ey = qy - py;
+        double ubar = 0.5 * (px + qx) - base_x, wbar = 0.5 * (py + qy) - top;
+        double uu = 0.5 * (ubar * (ubar - 1.0) + ex * ex * (1.0 / 12.0));
+        double ww = 0.5 * (wbar * (wbar - 1.0) + ey * ey * (1.0 / 12.0));
+        double em = ey * m, emx = ey * c * uu, emy = -ex * c * ww;
         // The colour is cb S + cn S' + emx ax + emy ay per channel (S' the next texel's sum).
-        double cn = em * ubar, cb = em - cn;
+        double cn = em * ubar, cb = em - cn, col = base_x - first_col;
         if (kGrad) {
-            double vp = wp - 0.5, vq = wq - 0.5, vbar = 0.5 * (vp + vq);
-            double uv = (up * (2.0 * vp + vq) + uq * (vp + 2.0 * vq)) * (1.0 / 6.0);
+            double vbar = wbar - 0.5, uv = ubar * vbar + ex * ey * (1.0 / 12.0);  // mean of u v
             sum[0] += em * col + cn + ey * g * (col * vbar + uv);
             cb += ey * g * (vbar - uv);
             cn += ey * g * uv;
@@ -169,7 +170,6 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
         at += across_x ? step_cx : step_cy;
         const double shift_x = across_x ? double(sx) : 0.0, shift_y = across_x ? 0.0 : double(sy);
         base_x += shift_x;
-        col += shift_x;
         line_x += shift_x;
         r += across_x ? 0 : sy;
         top += shift_y;
