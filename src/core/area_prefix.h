@@ -117,8 +117,9 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     const int64_t nch = NCH ? NCH : t.nch, e = 3 * nch, row_stride = (t.cols + 1) * e;
     int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
     const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
-    double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);
-    double tx = steps_x ? (line_x - x0) / dx : 2.0, ty = steps_y ? (line_y - y0) / dy : 2.0;
+    const double off_x = sx > 0 ? 1.0 : 0.0, off_y = sy > 0 ? 1.0 : 0.0;  // the next lines, from the texel's corner
+    double tx = steps_x ? (double(ix0) + off_x - x0) / dx : 2.0;
+    double ty = steps_y ? (double(iy0) + off_y - y0) / dy : 2.0;
     const double step_tx = steps_x ? double(sx) / dx : 0.0, step_ty = steps_y ? double(sy) / dy : 0.0;
     int64_t at = ((iy0 - t.r0) * (t.cols + 1) + (ix0 - t.c0)) * e;
     const double* row_m = model.row_m.data() - row_base;
@@ -162,18 +163,16 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     const int64_t step_cx = sx * e, step_cy = sy * row_stride;
     for (int left = steps_x + steps_y; left > 0; --left) {
         const bool across_x = tx < ty;
-        const double qx = across_x ? line_x : x0 + ty * dx;
-        const double qy = across_x ? y0 + tx * dy : line_y;
+        const double qx = across_x ? base_x + off_x : x0 + ty * dx;
+        const double qy = across_x ? y0 + tx * dy : top + off_y;
         piece(px, py, qx, qy);
         px = qx;
         py = qy;
         at += across_x ? step_cx : step_cy;
         const double shift_x = across_x ? double(sx) : 0.0, shift_y = across_x ? 0.0 : double(sy);
         base_x += shift_x;
-        line_x += shift_x;
         r += across_x ? 0 : sy;
         top += shift_y;
-        line_y += shift_y;
         m = row_m[r];
         if (kGrad) {
             g = row_g[r];

@@ -68,7 +68,7 @@ inline void run(const float* v, int64_t n, int64_t xs, int64_t ys, float* __rest
         float q = room < d ? room / std::max(d, FLT_MIN) * kShrink : 1.0f;
         ax *= q;
         ay *= q;
-        bool ok = std::fabs(s) <= FLT_MAX && std::fabs(ax) <= FLT_MAX && std::fabs(ay) <= FLT_MAX;
+        bool ok = (s + ax + ay) * 0.0f == 0.0f;  // all finite (an overflowing sum: 0 too)
         ox[k] = ok ? ax : 0.0f;
         oy[k] = ok ? ay : 0.0f;
     }
