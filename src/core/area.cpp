@@ -1,12 +1,22 @@
-// The area filter: every output pixel is the solid-angle mean of the box-reconstructed source
-// over the pixel's footprint, integrated exactly.
+// The area filter: every output pixel is the solid-angle mean of the reconstructed source over
+// the pixel's footprint, integrated exactly.
+//
+// The reconstruction is conservative and piecewise linear (area_slopes.h): inside texel t,
+// centre (cx, cy) in level-0 image pixels, f = s_t + ax_t (x - cx) + ay_t (y - cy), the slopes
+// (colour per texel) limited so that f stays within the range of the texel and its four
+// neighbours (0 slopes, the box, at cell edges, lat-long pole rows, disk rims and holes). A piece
+// of t with area A and first moments Dx, Dy about the centre (texels^2, texels^3; green.h)
+// holds the solid angle w = m A + gx Dx + gy Dy (sr; the density model of area_source.h) and the
+// colour s w + c (ax Dx + ay Dy), c = slope_weight (sr per texel^2: the model's least density
+// over the texel). The slope terms integrate to 0 over a whole texel, so every texel still
+// hands out exactly s_t times its solid angle.
 //
 // The footprint of an output pixel is the region of the source that its directions come from.
 // Its corners' source points are shared with the neighbouring pixels, so the footprints tile
 // the source; each is integrated over the texel grid exactly (green.h), each texel's piece
-// weighted by the solid angle it holds (area_source.h). Every texel's solid angle is thus
-// handed out exactly once, to the pixels that cover it: a one-texel sun keeps its energy in
-// any conversion, a constant map stays constant, and nothing aliases.
+// weighted by the solid angle it holds (area_source.h). Every texel's solid angle and colour
+// are thus handed out exactly once, to the pixels that cover it: a one-texel sun keeps its
+// energy in any conversion, a constant map stays constant, and nothing aliases.
 //
 // Work is split into bands of kAreaTile output rows, each band into tiles (area_tiles.h).
 #include <algorithm>

@@ -1,14 +1,18 @@
 // The area filter's direct path for lat-long and tennisball sources: footprints integrated
 // through their edges, each edge once for the two pixels that share it.
 //
-// By Green's theorem, the colour a footprint P holds, sum over texels t of s_t times the solid
-// angle of P n t, is the closed integral over P's boundary of Q dy, with
-// Q(x, y) = rho(y) S_r(x): rho the row's density model (area_source.h) and S_r(x) the running
-// sum of row r's values from the tile's first column to x (a prefix sum plus the part of the
-// texel under x). Its solid angle is the same with S_r(x) = x - c0. The integral along an edge
-// walks the texels it crosses (green.h's grid traversal) and needs nothing else, so a pixel's
-// colour is the sum of its four edges' integrals, and a pixel 16 texels wide costs its
-// perimeter, not its area. The prefix sums are made per tile over its source box.
+// By Green's theorem, the colour a footprint P holds, the integral over P of rho f (f the
+// linear reconstruction of area_slopes.h, rho the row's density model, area_source.h), is the
+// closed integral over P's boundary of Q dy - P dx. Q(x, y) = rho(y) S_r(x) + c ax (u^2 - u) / 2
+// carries the values: S_r(x) the running sum of row r's values from the tile's first column to
+// x (a prefix sum plus the part of the texel under x, u = x - ix); the x slope's term and
+// P = c ay (w^2 - w) / 2 (w = y - iy) carry the slopes, c the row's slope weight (sr per
+// texel^2). Both slope terms vanish on the texel's sides, so they need no running sums and add
+// nothing over a whole texel. Its solid angle is the same with S_r(x) = x - c0 and no slopes.
+// The integral along an edge walks the texels it crosses (green.h's grid traversal) and needs
+// nothing else, so a pixel's colour is the sum of its four edges' integrals, and a pixel 16
+// texels wide costs its perimeter, not its area. The prefix sums are made per tile over its
+// source box.
 #pragma once
 
 #include <cmath>
