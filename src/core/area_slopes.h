@@ -10,7 +10,13 @@
 // texel's own cell's valid region (cell edges, a disk's rim), and both are 0 in a lat-long's
 // pole rows and wherever a texel or neighbour is not finite (or the slopes overflow).
 //
-// The planes x, y hold ax and ay at the same offsets as the image holds s.
+// The planes x, y hold ax and ay at the same offsets as the image holds s. A piece of texel t
+// adds c (ax Dx + ay Dy) to the colour (Dx, Dy its first moments about the centre, green.h;
+// c = slope_weight, area_source.h), which adds up to 0 over the whole texel: every texel still
+// hands out exactly s_t times its solid angle. Where the general path reads a texel in another's
+// place (a continued grid past a cell's edge), it turns that texel's slopes into its frame if
+// the grids map onto each other by a reflection or turn (the octahedral and equal-area folds),
+// else takes none (the box).
 #pragma once
 
 #include <algorithm>
