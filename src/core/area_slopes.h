@@ -6,9 +6,10 @@
 // until the texel's corners, s +- (|ax| + |ay|) / 2, stay within the minimum and maximum of
 // the texel and its neighbours (a Barth-Jespersen limiter): the reconstruction never leaves
 // that range, so no negative value and no overshoot next to an HDR sun, and a linear ramp is
-// kept as it is. The slope along an axis is 0 (the box) where a neighbour on it is not in the
-// texel's own cell's valid region (cell edges, a disk's rim), and both are 0 in a lat-long's
-// pole rows and wherever a texel or neighbour is not finite (or the slopes overflow).
+// kept as it is. Past a cell's edge the neighbour is the texel across the seam (remap_tap);
+// the slope along an axis is 0 (the box) where it has no neighbour (the rim of a mirror ball,
+// angular map or fisheye, a lat-long's poles), both are 0 in a lat-long's pole rows and wherever a texel or neighbour is not finite
+// (or the slopes overflow).
 //
 // The planes x, y hold ax and ay at the same offsets as the image holds s. A piece of texel t
 // adds c (ax Dx + ay Dy) to the colour (Dx, Dy its first moments about the centre, green.h;
@@ -92,18 +93,30 @@ inline bool usable(const Geometry& g, int64_t cell, int64_t& ix, int64_t iy) {
     return area_readable(g, cell, ix, iy);
 }
 
-// The slopes of texel (ix, iy) of `cell` (readable), each neighbour checked.
+// Neighbour (jx, jy) of a texel of `cell`: itself where the cell holds it; past a cell's edge
+// the texel across the seam (remap_tap: the one that holds its continued centre's direction;
+// a paraboloid's rim is the seam to its other half), but none past the rim of the other disks
+// (a mirror ball's is singular, a fisheye's the end of the view) or a lat-long's poles.
+inline const float* neighbour(const Image& img, const Geometry& g, int64_t cell, int64_t jx,
+                              int64_t jy) {
+    if (usable(g, cell, jx, jy)) return img.texel(jy, jx);
+    if ((g.disk() && g.family != kParaboloid) || g.family == kLatlong) return nullptr;
+    int64_t kx, ky;
+    remap_tap(g, cell, jx, jy, kx, ky);
+    return img.texel(ky, kx);
+}
+
+// The slopes of texel (ix, iy) of `cell` (readable), each neighbour found by neighbour().
 inline void texel(const Image& img, const Geometry& g, int64_t cell, int64_t ix, int64_t iy,
                   float* sx, float* sy) {
     const int64_t nch = img.channels, at = (iy * img.width + ix) * nch;
-    int64_t lx = ix - 1, rx = ix + 1, tx = ix, bx = ix;
-    bool hx = usable(g, cell, lx, iy) && usable(g, cell, rx, iy);
-    bool hy = usable(g, cell, tx, iy - 1) && usable(g, cell, bx, iy + 1);
+    const float *l = neighbour(img, g, cell, ix - 1, iy), *r = neighbour(img, g, cell, ix + 1, iy);
+    const float *t = neighbour(img, g, cell, ix, iy - 1), *b = neighbour(img, g, cell, ix, iy + 1);
+    const bool hx = l && r, hy = t && b;
     const float* s = img.data + at;
     for (int64_t c = 0; c < nch; ++c) {
-        float l = hx ? img.texel(iy, lx)[c] : 0.0f, r = hx ? img.texel(iy, rx)[c] : 0.0f;
-        float t = hy ? img.texel(iy - 1, tx)[c] : 0.0f, b = hy ? img.texel(iy + 1, bx)[c] : 0.0f;
-        limit(s[c], l, r, t, b, hx, hy, sx[at + c], sy[at + c]);
+        limit(s[c], hx ? l[c] : 0.0f, hx ? r[c] : 0.0f, hy ? t[c] : 0.0f, hy ? b[c] : 0.0f, hx, hy,
+              sx[at + c], sy[at + c]);
     }
 }
 
