@@ -6,10 +6,10 @@
 // until the texel's corners, s +- (|ax| + |ay|) / 2, stay within the minimum and maximum of
 // the texel and its neighbours (a Barth-Jespersen limiter): the reconstruction never leaves
 // that range, so no negative value and no overshoot next to an HDR sun, and a linear ramp is
-// kept as it is. Past a cell's edge the neighbour is the texel across the seam (remap_tap);
-// the slope along an axis is 0 (the box) where it has no neighbour (the rim of a mirror ball,
-// angular map or fisheye, a lat-long's poles), both are 0 in a lat-long's pole rows and wherever a texel or neighbour is not finite
-// (or the slopes overflow).
+// kept as it is. Past a cell's edge the neighbour is the texel across the seam (remap_tap). The
+// slope along an axis is 0 (the box) where it has no neighbour (past a disk's rim, a lat-long's
+// poles); both are 0 in a lat-long's pole rows, in texels a disk's rim cuts, and wherever a
+// texel or neighbour is not finite (or the slopes overflow).
 //
 // The planes x, y hold ax and ay at the same offsets as the image holds s. A piece of texel t
 // adds c (ax Dx + ay Dy) to the colour (Dx, Dy its first moments about the centre, green.h;
@@ -94,13 +94,12 @@ inline bool usable(const Geometry& g, int64_t cell, int64_t& ix, int64_t iy) {
 }
 
 // Neighbour (jx, jy) of a texel of `cell`: itself where the cell holds it; past a cell's edge
-// the texel across the seam (remap_tap: the one that holds its continued centre's direction;
-// a paraboloid's rim is the seam to its other half), but none past the rim of the other disks
-// (a mirror ball's is singular, a fisheye's the end of the view) or a lat-long's poles.
+// the texel across the seam (remap_tap: the one that holds its continued centre's direction),
+// but none past a disk's rim or a lat-long's poles.
 inline const float* neighbour(const Image& img, const Geometry& g, int64_t cell, int64_t jx,
                               int64_t jy) {
     if (usable(g, cell, jx, jy)) return img.texel(jy, jx);
-    if ((g.disk() && g.family != kParaboloid) || g.family == kLatlong) return nullptr;
+    if (g.disk() || g.family == kLatlong) return nullptr;
     int64_t kx, ky;
     remap_tap(g, cell, jx, jy, kx, ky);
     return img.texel(ky, kx);
@@ -118,6 +117,17 @@ inline void texel(const Image& img, const Geometry& g, int64_t cell, int64_t ix,
         limit(s[c], hx ? l[c] : 0.0f, hx ? r[c] : 0.0f, hy ? t[c] : 0.0f, hy ? b[c] : 0.0f, hx, hy,
               sx[at + c], sy[at + c]);
     }
+}
+
+// True when texel (ix, iy) of the cell whose valid region starts at (x0, y0) lies wholly in
+// its disk (or the layout has none): a texel the rim cuts keeps the box, whose pieces on this
+// side of the rim then still hand out exactly its value.
+inline bool in_disk(const Geometry& g, int64_t x0, int64_t y0, int64_t ix, int64_t iy) {
+    if (!g.disk()) return true;
+    double c = 0.5 * double(g.n);
+    double dx = std::max(std::fabs(double(ix) - double(x0) - c), std::fabs(double(ix + 1) - double(x0) - c));
+    double dy = std::max(std::fabs(double(iy) - double(y0) - c), std::fabs(double(iy + 1) - double(y0) - c));
+    return dx * dx + dy * dy <= c * c;
 }
 
 // The slopes of image row iy (sx, sy already zero outside the valid regions).
@@ -140,7 +150,7 @@ inline void row(const Image& img, const Geometry& g, int64_t iy, float* sx, floa
             continue;
         }
         for (int64_t x = x0; x < x1; ++x)
-            if (area_readable(g, cell, x, iy)) texel(img, g, cell, x, iy, sx, sy);
+            if (in_disk(g, x0, y0, x, iy)) texel(img, g, cell, x, iy, sx, sy);
     }
 }
 
