@@ -92,7 +92,9 @@ def main(argv: list[str]) -> int:
             off.append(name)
     if off:
         # The area filter (the default) keeps every texel's energy: this is a defect to report.
-        print(f"error: {', '.join(off)} moved the mean radiance by more than 0.5 %", file=sys.stderr)
+        print(
+            f"error: {', '.join(off)} moved the mean radiance by more than 0.5 %", file=sys.stderr
+        )
         return 1
     print(f"wrote {outdir}/")
     return 0

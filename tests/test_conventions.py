@@ -307,7 +307,9 @@ def _tool_file(layout, synth, n):
 def test_preset_reads_tool_file(preset, layout, synth, n, exact):
     tool = _tool_file(layout, synth, n)
     ours, mask = _compare_mask(layout, n, exact)
-    got = envconv.convert(tool, layout, size=n, samples=1, filter="bilinear", in_convention=preset).pixels
+    got = envconv.convert(
+        tool, layout, size=n, samples=1, filter="bilinear", in_convention=preset
+    ).pixels
     err = np.abs(got - env(ours))[mask].max()
     assert err < (1e-5 if exact else 2e-2)
     convention = resolve_convention(preset, layout)
@@ -321,7 +323,9 @@ def test_preset_reads_tool_file(preset, layout, synth, n, exact):
 def test_preset_writes_tool_file(preset, layout, synth, n, exact):
     ours_dirs, _ = pixel_directions(layout, n)
     ours = envconv.EnvMap(env(ours_dirs).astype(np.float32), layout)
-    got = envconv.convert(ours, layout, size=n, samples=1, filter="bilinear", out_convention=preset).pixels
+    got = envconv.convert(
+        ours, layout, size=n, samples=1, filter="bilinear", out_convention=preset
+    ).pixels
     _, mask = _compare_mask(layout, n, exact)
     err = np.abs(got - env(synth(n)))[mask].max()
     assert err < (1e-5 if exact else 2e-2)
@@ -331,8 +335,12 @@ def test_preset_writes_tool_file(preset, layout, synth, n, exact):
 def test_round_trip_through_preset(preset, layout, synth, n, exact):
     dirs, _ = pixel_directions(layout, n)
     ours = envconv.EnvMap(env(dirs).astype(np.float32), layout)
-    theirs = envconv.convert(ours, layout, size=n, samples=1, filter="bilinear", out_convention=preset)
-    back = envconv.convert(theirs, layout, size=n, samples=1, filter="bilinear", in_convention=preset).pixels
+    theirs = envconv.convert(
+        ours, layout, size=n, samples=1, filter="bilinear", out_convention=preset
+    )
+    back = envconv.convert(
+        theirs, layout, size=n, samples=1, filter="bilinear", in_convention=preset
+    ).pixels
     _, mask = _compare_mask(layout, n, exact)
     assert np.abs(back - env(dirs))[mask].max() < (1e-5 if exact else 3e-2)
 
@@ -342,7 +350,13 @@ def test_cross_layout_conversion_with_two_presets():
     blender = _tool_file("latlong", latlong_blender, 64)
     n = 12
     cross = envconv.convert(
-        blender, "cube-vcross", size=n, samples=1, filter="bilinear", in_convention="blender", out_convention="unity"
+        blender,
+        "cube-vcross",
+        size=n,
+        samples=1,
+        filter="bilinear",
+        in_convention="blender",
+        out_convention="unity",
     )
     _, flags = pixel_directions("cube-vcross", n)
     truth = env(cube_file(HDRSHOP_CROSS, 3, 4, G_FACES, LH)(n))
@@ -370,14 +384,18 @@ def test_up_z_turns_z_up_world_to_y_up():
     truth = sky(np.stack([dirs[..., 0], -dirs[..., 2], dirs[..., 1]], -1))
     valid = pixel_directions("cube-hcross", NC)[1] == 2
     assert np.abs(got - truth)[valid].max() < 1e-5
-    same = envconv.convert(zup, "cube-hcross", size=NC, samples=1, filter="bilinear", axes="x,z,-y").pixels
+    same = envconv.convert(
+        zup, "cube-hcross", size=NC, samples=1, filter="bilinear", axes="x,z,-y"
+    ).pixels
     np.testing.assert_array_equal(got, same)
 
 
 def test_axes_as_convention_mirrors():
     dirs, _ = pixel_directions("latlong", NL)
     ours = envconv.EnvMap(env(dirs).astype(np.float32), "latlong")
-    got = envconv.convert(ours, "latlong", size=NL, samples=1, filter="bilinear", in_convention="-x,y,z").pixels
+    got = envconv.convert(
+        ours, "latlong", size=NL, samples=1, filter="bilinear", in_convention="-x,y,z"
+    ).pixels
     assert np.abs(got - env(dirs * [-1, 1, 1])).max() < 1e-5
 
 
@@ -436,7 +454,9 @@ def test_cli_conventions(tmp_path):
 def test_out_axes_inverts_up_z():
     dirs, _ = pixel_directions("cube-vcross", NC)
     ours = envconv.EnvMap(env(dirs).astype(np.float32), "cube-vcross")
-    zup = envconv.convert(ours, "cube-vcross", size=NC, samples=1, filter="bilinear", out_convention="x,z,-y")
+    zup = envconv.convert(
+        ours, "cube-vcross", size=NC, samples=1, filter="bilinear", out_convention="x,z,-y"
+    )
     back = envconv.convert(zup, "cube-vcross", size=NC, samples=1, filter="bilinear", up="z").pixels
     valid = pixel_directions("cube-vcross", NC)[1] == 2
     assert np.abs(back - env(dirs))[valid].max() < 1e-5

@@ -56,9 +56,17 @@ VIEWS = [  # envconv's fov (H, V), yaw, pitch, roll
 
 @pytest.mark.parametrize("fov, yaw, pitch, roll", VIEWS)
 def test_perspective_is_py360converts_view(sky, fov, yaw, pitch, roll):
-    out = envconv.convert(sky, to="perspective", size=f"{W}x{H}", fov=f"{fov[0]},{fov[1]}",
-                          yaw=yaw, pitch=pitch, roll=roll, samples=1,
-                          filter="bilinear")  # fmt: skip (py360convert reads one bilinear tap)
+    out = envconv.convert(
+        sky,
+        to="perspective",
+        size=f"{W}x{H}",
+        fov=f"{fov[0]},{fov[1]}",
+        yaw=yaw,
+        pitch=pitch,
+        roll=roll,
+        samples=1,
+        filter="bilinear",
+    )  # fmt: skip (py360convert reads one bilinear tap)
     assert out.pixels.shape == (H, W, 3)
     source = sky.pixels.astype(np.float64)
     peer = py360_port.e2p(source, (_py360_fov(fov[0], W), _py360_fov(fov[1], H)), yaw, pitch,

@@ -191,8 +191,11 @@ def test_single_tap_loses_highlight_energy(starfield):
     energy = energies["whole"]
     errors = [
         abs(
-            _energy(envconv.convert(source, n, size=default_size(source, n) // 4, samples=1,
-                                    filter="bilinear"))  # fmt: skip
+            _energy(
+                envconv.convert(
+                    source, n, size=default_size(source, n) // 4, samples=1, filter="bilinear"
+                )
+            )  # fmt: skip
             - energy
         )
         / energy
@@ -237,7 +240,11 @@ def test_single_sample_tiles_match_naive_as_stored(name, n, channels, alpha):
         np.float32
     )
     result = envconv.convert(
-        envconv.EnvMap(source, "latlong"), name, size=n, samples=1, alpha=alpha,
+        envconv.EnvMap(source, "latlong"),
+        name,
+        size=n,
+        samples=1,
+        alpha=alpha,
         filter="bilinear",
     )
     expected, coverage = naive.naive_convert(source, name, n, 1)
