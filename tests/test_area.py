@@ -11,13 +11,12 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import naive
 import numpy as np
 import pytest
 
 import envconv
 from envconv.resample.options import default_size
-
-import naive
 
 LAYOUTS = list(envconv.layouts.LAYOUTS)
 PARK = Path(__file__).resolve().parent.parent / "examples" / "data" / "park-latlong-512.exr"

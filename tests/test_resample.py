@@ -16,9 +16,9 @@ import pytest
 from conftest import rel_rms
 
 import envconv
-from envconv.resample.options import AREA_POINT_ONLY
 from envconv.layouts import LAYOUTS
 from envconv.layouts.geometry import dir_to_uv, pixel_directions, pixel_solid_angles
+from envconv.resample.options import AREA_POINT_ONLY
 
 NAMES = list(LAYOUTS)
 N_LATLONG = 64  # the analytic lat-long source is 128 × 64
