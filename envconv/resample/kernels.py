@@ -43,8 +43,7 @@ __all__ = [
 ]  # fmt: skip
 
 #: Filter codes (src/core/taps.h FilterCode): three point filters, and the area filter
-#: (src/core/area.cpp) that integrates a conservative piecewise-linear reconstruction (slopes
-#: limited to the range of each texel and its neighbours) over each pixel's footprint.
+#: (src/core/area.cpp) that integrates the box reconstruction over each pixel's footprint.
 FILTER_NEAREST = _core.FILTER_NEAREST
 FILTER_BILINEAR = _core.FILTER_BILINEAR
 FILTER_BICUBIC = _core.FILTER_BICUBIC

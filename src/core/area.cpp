@@ -1,22 +1,12 @@
-// The area filter: every output pixel is the solid-angle mean of the reconstructed source over
-// the pixel's footprint, integrated exactly.
-//
-// The reconstruction is conservative and piecewise linear (area_slopes.h): inside texel t,
-// centre (cx, cy) in level-0 image pixels, f = s_t + ax_t (x - cx) + ay_t (y - cy), the slopes
-// (colour per texel) limited so that f stays within the range of the texel and its four
-// neighbours (0 slopes, the box, at cell edges, lat-long pole rows, disk rims and holes). A piece
-// of t with area A and first moments Dx, Dy about the centre (texels^2, texels^3; green.h)
-// holds the solid angle w = m A + gx Dx + gy Dy (sr; the density model of area_source.h) and the
-// colour s w + c (ax Dx + ay Dy), c = slope_weight (sr per texel^2: the model's least density
-// over the texel). The slope terms integrate to 0 over a whole texel, so every texel still
-// hands out exactly s_t times its solid angle.
+// The area filter: every output pixel is the solid-angle mean of the box-reconstructed source
+// over the pixel's footprint, integrated exactly.
 //
 // The footprint of an output pixel is the region of the source that its directions come from.
 // Its corners' source points are shared with the neighbouring pixels, so the footprints tile
 // the source; each is integrated over the texel grid exactly (green.h), each texel's piece
-// weighted by the solid angle it holds (area_source.h). Every texel's solid angle and colour
-// are thus handed out exactly once, to the pixels that cover it: a one-texel sun keeps its
-// energy in any conversion, a constant map stays constant, and nothing aliases.
+// weighted by the solid angle it holds (area_source.h). Every texel's solid angle is thus
+// handed out exactly once, to the pixels that cover it: a one-texel sun keeps its energy in
+// any conversion, a constant map stays constant, and nothing aliases.
 //
 // Work is split into bands of kAreaTile output rows, each band into tiles (area_tiles.h).
 #include <algorithm>
@@ -26,7 +16,6 @@
 
 #include "area.h"
 #include "area_prefix.h"
-#include "area_slopes.h"
 #include "area_slow.h"
 #include "area_tiles.h"
 #include "parallel.h"
@@ -99,43 +88,43 @@ void slow_block(const AreaJob& job, SlowPath& sp, PixelSums& sums, int64_t i0, i
 
 // Sink of green.h for the direct path: texels read as they are (a lat-long's columns modulo its
 // width), weighted by a lat-long or tennisball row's exact solid angle (kRows) or the density
-// model, plus the slope terms c (ax Dx + ay Dy) (slope_weight); NCH channels (0: sums.nch).
+// model; NCH channels (0: sums.nch).
 template <bool kRows, int NCH>
 struct DirectSink {
-    static constexpr bool kMomentX = true;
+    static constexpr bool kMomentX = !kRows;
     const SourceModel& model;
     int64_t cell, row0, period;
     double sign;
     PixelSums& sums;
-    double m = 0.0, g = 0.0, c = 0.0;
-    // The slope terms need the y moments everywhere.
-    bool flat(int64_t, int64_t) const { return false; }
+    double m = 0.0, g = 0.0;
+    // True when rows r0 ... r1 all hold a flat density model (no y moments needed).
+    bool flat(int64_t r0, int64_t r1) const {
+        if (!kRows) return false;
+        for (int64_t r = r0; r <= r1; ++r)
+            if (model.row_g[size_t(r - row0)] != 0.0) return false;
+        return true;
+    }
     void row(int64_t iy) {
         if (kRows) {
             m = sign * model.row_m[size_t(iy - row0)];
             g = sign * model.row_g[size_t(iy - row0)];
-            c = sign * slope_weight(model.row_m[size_t(iy - row0)], 0.0, model.row_g[size_t(iy - row0)]);
         }
     }
     void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
-        double w, lin;
+        double w;
         if (kRows) {
             w = m * area + g * dy;
-            lin = c;
         } else {
             TexelDensity t = model.texel(cell, ix, iy);
             w = sign * (t.m * area + t.gx * dx + t.gy * dy);
-            lin = sign * slope_weight(t);
         }
         if (period) {
             while (ix < 0) ix += period;
             while (ix >= period) ix -= period;
         }
         const int64_t nch = NCH ? NCH : sums.nch;
-        const int64_t at = (iy * model.image.width + ix) * nch;
-        const float *v = model.image.data + at, *sx = model.slope_x.data() + at, *sy = model.slope_y.data() + at;
-        const double lx = lin * dx, ly = lin * dy;
-        for (int64_t c = 0; c < nch; ++c) sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]);
+        const float* v = model.image.data + (iy * model.image.width + ix) * nch;
+        for (int64_t c = 0; c < nch; ++c) sums.acc[c] += w * double(v[c]);
         sums.weight += w;
     }
 };
@@ -337,16 +326,10 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax), r0 = floor_texel(ymin), r1 = floor_texel(ymax);
     if ((c1 - c0 + 1) * (r1 - r0 + 1) > kMaxTableTexels) return false;
     const int64_t row_base = (g.ref_cell / s.columns) * s.cell_height();
-    int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
-    // A curved tile's polylines may bulge past the cell: its rows (whose densities are known)
-    // and, where columns do not wrap, its columns bound the table (else the per-pixel path).
-    const int64_t col_base = (g.ref_cell % s.columns) * s.cell_width();
-    if (r0 < row_base || r1 >= row_base + s.cell_height()) return false;
-    if (!period && (c0 < col_base || c1 >= col_base + s.cell_width())) return false;
     grad = false;
     for (int64_t r = r0; r <= r1; ++r) grad = grad || job.model.row_g[size_t(r - row_base)] != 0.0;
-    return ts.table.build(job.model.image, job.model.slope_x.data(), job.model.slope_y.data(), period,
-                          r0, r1, c0, c1);
+    int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
+    return ts.table.build(job.model.image, period, r0, r1, c0, c1);
 }
 
 // True when every pixel of a lat-long or tennisball grid passes direct_quad: all corners
@@ -752,7 +735,6 @@ bool set_area_direct(bool allowed) { return direct_allowed.exchange(allowed); }
 void resample_area(const Image& src, const Conversion& cv, int samples, const ResampleOutput& out,
                    int threads, int64_t* progress) {
     SourceModel model(src, cv.src);
-    build_slopes(src, cv.src, threads, model.slope_x, model.slope_y);
     Singular sing = source_singular(cv);
     AreaJob job{cv, model, sing, out, samples};
     int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;

@@ -71,8 +71,7 @@ struct SlowPath {
 };
 
 // Sink of green.h: solid angle of each texel's piece (the texel's density model) and its
-// colour, read through area_texel: s times the solid angle plus the slope terms, c (ax Dx +
-// ay Dy) (area_slopes.h, slope_weight; none for a texel read in another's place).
+// colour, read through area_texel.
 struct TexelSink {
     static constexpr bool kMomentX = true;
     const SourceModel& model;
@@ -85,51 +84,9 @@ struct TexelSink {
         TexelDensity t = model.texel(cell, ix, iy);
         double w = sign * (t.m * area + t.gx * dx + t.gy * dy);
         if (w == 0.0) return;
-        bool own;
-        const float* v = area_texel(model.image, model.g, cell, ix, iy, &own);
+        const float* v = area_texel(model.image, model.g, cell, ix, iy);
+        for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
         sums.weight += w;
-        int turn[4] = {1, 0, 0, 1};  // this cell's x, y steps in the read texel's grid
-        if (model.slope_x.empty() || (!own && !grid_turn(model.image, model.g, cell, ix, iy, v, turn))) {
-            for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
-            return;
-        }
-        const int64_t at = v - model.image.data;
-        const float *sx = model.slope_x.data() + at, *sy = model.slope_y.data() + at;
-        const double c = sign * slope_weight(t), lx = c * dx, ly = c * dy;
-        for (int64_t c = 0; c < sums.nch; ++c) {
-            double ax = double(sx[c]), ay = double(sy[c]);
-            sums.acc[c] += w * double(v[c]) + lx * (turn[0] * ax + turn[1] * ay) + ly * (turn[2] * ax + turn[3] * ay);
-        }
-    }
-
-    // For texel (ix, iy) of the cell's continued grid read in another's place (v): true when
-    // the two grids map onto each other by a reflection or a quarter turn around it (the folds
-    // of the octahedral and equal-area squares), turn then the steps in the read texel's grid of
-    // a step in x and in y (so that its slopes are turned into this grid); false elsewhere
-    // (the slopes are dropped there: the box).
-    static bool grid_turn(const Image& img, const Geometry& g, int64_t cell, int64_t ix, int64_t iy,
-                          const float* v, int* turn) {
-        // The centre and a quarter texel along x and y: inside the texel, clear of the fold.
-        const double px[3] = {double(ix) + 0.5, double(ix) + 0.75, double(ix) + 0.5};
-        const double py[3] = {double(iy) + 0.5, double(iy) + 0.5, double(iy) + 0.75};
-        ImagePoint q[3];
-        for (int k = 0; k < 3; ++k) {
-            double a, b;
-            cell_local(g, cell, px[k], py[k], a, b);
-            Vec3 d = face_to_dir(g, g.cell_face[cell], a, b);
-            FacePoint f = dir_to_face(g, d.x, d.y, d.z);
-            q[k] = face_to_image(g, f.face, f.a, f.b);
-            if (q[k].cell != q[0].cell) return false;
-        }
-        const int64_t at = (v - img.data) / img.channels;
-        if (floor_index(q[0].x) != at % img.width || floor_index(q[0].y) != at / img.width) return false;
-        const double j[4] = {4.0 * (q[1].x - q[0].x), 4.0 * (q[1].y - q[0].y), 4.0 * (q[2].x - q[0].x),
-                             4.0 * (q[2].y - q[0].y)};
-        for (int k = 0; k < 4; ++k) {
-            turn[k] = int(std::lround(j[k]));
-            if (std::fabs(j[k] - turn[k]) > 1e-6 || std::abs(turn[k]) > 1) return false;
-        }
-        return std::abs(turn[0]) + std::abs(turn[1]) == 1 && std::abs(turn[2]) + std::abs(turn[3]) == 1;
     }
 };
 

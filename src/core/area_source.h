@@ -15,7 +15,6 @@
 // however the texel is cut: the area filter hands every texel's solid angle out exactly once.
 #pragma once
 
-#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <vector>
@@ -189,8 +188,6 @@ struct SourceModel {
     const Geometry& g;
     std::vector<double> row_m, row_g;  // lat-long / tennisball: per image row
     double area;                       // (a, b) area of one texel
-    // Slopes of the linear reconstruction (area_slopes.h) at the image's offsets; empty: the box.
-    std::vector<float> slope_x, slope_y;
 
     SourceModel(const Image& image_, const Geometry& g_) : image(image_), g(g_) {
         area = (2.0 / double(g.nx)) * (2.0 / double(g.n));
@@ -246,15 +243,6 @@ struct SourceModel {
     }
 };
 
-// The density the slope terms of the linear reconstruction are weighted by (area_slopes.h):
-// the model's least value over the texel (0 if it goes negative). Any constant integrates
-// the slopes to 0 over the whole texel; the least one keeps rho s + c (ax (x - cx) +
-// ay (y - cy)) between rho times the least and the greatest value of the reconstruction.
-inline double slope_weight(double m, double gx, double gy) {
-    return std::max(0.0, m - 0.5 * (std::fabs(gx) + std::fabs(gy)));
-}
-inline double slope_weight(const TexelDensity& t) { return slope_weight(t.m, t.gx, t.gy); }
-
 // True when texel (ix, iy) of `cell`'s grid holds data the area filter reads as it is: inside
 // the cell's valid region (the face, not its guard ring), or for a disk, a texel whose square
 // meets the disk.
@@ -273,10 +261,8 @@ inline bool area_readable(const Geometry& g, int64_t cell, int64_t ix, int64_t i
 // The texel the area filter reads for texel (ix, iy) of `cell`'s continued grid: itself where
 // readable; a lat-long column past the wrap, modulo the width; anything else, the texel that
 // holds the continued direction of its centre (remap_tap).
-// *own (when given) tells whether it is the texel itself (false: another, in its own frame).
 inline const float* area_texel(const Image& src, const Geometry& g, int64_t cell, int64_t ix,
-                               int64_t iy, bool* own = nullptr) {
-    if (own) *own = true;
+                               int64_t iy) {
     if (g.family == kLatlong && g.guard == 0 && iy >= 0 && iy < g.n) {
         int64_t w = 2 * g.n;
         ix %= w;
@@ -284,7 +270,6 @@ inline const float* area_texel(const Image& src, const Geometry& g, int64_t cell
         return src.texel(iy, ix);
     }
     if (area_readable(g, cell, ix, iy)) return src.texel(iy, ix);
-    if (own) *own = false;
     int64_t jx, jy;
     remap_tap(g, cell, ix, iy, jx, jy);
     return src.texel(jy, jx);

@@ -13,11 +13,6 @@
 //
 // Values are signed: positive for a polygon whose shoelace area is positive (counter-clockwise
 // with y up; with y down, as images store it, that is clockwise on screen).
-//
-// Units: texels (level-0 image pixels), area in texels^2, Dx and Dy in texels^3. The area filter
-// needs no more: a piece's solid angle is m A + gx Dx + gy Dy (area_source.h) and, for the
-// linear reconstruction s + ax (x - cx) + ay (y - cy) of area_slopes.h, its colour is s times
-// that plus c (ax Dx + ay Dy); the moments of a whole texel are 0, so its pieces add up to s.
 #pragma once
 
 #include <algorithm>
