@@ -94,11 +94,12 @@ def estimate_read(width: int, height: int, channels: int, pixel_type: str = "flo
 
 
 def estimate_convert(envmap, to, size: int, guard: int = 0, mips: Any = None,
-                     alpha: bool = False, rips: int = 0) -> int:  # fmt: skip
+                     alpha: bool = False, rips: int = 0, scratch: int = 0) -> int:  # fmt: skip
     """Peak bytes of resampling ``envmap`` (an :class:`envconv.EnvMap`) into layout ``to`` at
     ``size`` and writing the result; see the module docstring. ``mips`` as
     :func:`envconv.convert` takes it after ``box:``/``ggx:`` are stripped; ``rips`` the
-    rip-map's resident bytes (:func:`envconv.resample.convert.memory_needed` works them out)."""
+    rip-map's resident bytes (:func:`envconv.resample.convert.memory_needed` works them out),
+    ``scratch`` the kernel's working buffers (the area filter's per-thread tables)."""
     from ..layouts import get_layout
     from ..resample.mips import mip_sizes
 
@@ -117,7 +118,7 @@ def estimate_convert(envmap, to, size: int, guard: int = 0, mips: Any = None,
     weights = sum(planes) if mips else 0
     appended = output if (holes or (appends and mips)) else 0  # np.concatenate, V dropped
     rips = 0 if mips else rips
-    resample = source + carrier + rips + output + coverage + weights + appended
+    resample = source + carrier + rips + output + coverage + weights + appended + scratch
     # Single-file layouts are encoded a band at a time as written; the cells of a multi-file
     # layout from one encoded copy of each level (counted as half float).
     write = source + output + (output // 2 if to.multi_file else 0) + (8 << 20)
