@@ -172,8 +172,8 @@ def convert(
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
-    _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
     with kernels.threads_for(threads):
+        _check_memory(envmap, to, size, guard, mips, alpha, samples, filter, out_convention)
         if envmap.layout.partial:
             from .partial import pad_partial
 
