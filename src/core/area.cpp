@@ -326,9 +326,14 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax), r0 = floor_texel(ymin), r1 = floor_texel(ymax);
     if ((c1 - c0 + 1) * (r1 - r0 + 1) > kMaxTableTexels) return false;
     const int64_t row_base = (g.ref_cell / s.columns) * s.cell_height();
+    int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
+    // A curved tile's polylines may bulge past the cell: its rows (whose densities are known)
+    // and, where columns do not wrap, its columns bound the table (else the per-pixel path).
+    const int64_t col_base = (g.ref_cell % s.columns) * s.cell_width();
+    if (r0 < row_base || r1 >= row_base + s.cell_height()) return false;
+    if (!period && (c0 < col_base || c1 >= col_base + s.cell_width())) return false;
     grad = false;
     for (int64_t r = r0; r <= r1; ++r) grad = grad || job.model.row_g[size_t(r - row_base)] != 0.0;
-    int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
     return ts.table.build(job.model.image, period, r0, r1, c0, c1);
 }
 
