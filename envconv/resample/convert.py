@@ -65,6 +65,7 @@ from .options import (
     default_size,
     output_channels,
     output_layout,
+    rim_to_mirror_ball,
 )
 from .regrid import output_on_grid, source_on_centres
 
@@ -178,7 +179,7 @@ def convert(
             from .partial import pad_partial
 
             envmap = pad_partial(envmap)
-        if _rim_to_mirror_ball(envmap, to, filter):
+        if rim_to_mirror_ball(envmap, to, filter):
             envmap = convert(envmap, "latlong", size=round(1.5 * default_size(envmap, "latlong")),
                              in_convention=in_convention)  # fmt: skip
             options["in_convention"] = None
@@ -191,17 +192,6 @@ def convert(
 
 #: Working bytes per thread of the area filter, for the memory estimate.
 AREA_SCRATCH = 12 << 20
-
-#: Sources whose whole rim is one direction (−Z): the area filter cannot yet take them into a
-#: mirror ball, whose own rim is −Z too (a one-texel sun there moves by up to 1 %): such a
-#: conversion goes through an exact lat-long 1.5 times finer than the source at the horizon.
-RIM_SOURCES = ("sphere", "angular")
-
-
-def _rim_to_mirror_ball(envmap: EnvMap, to: Layout, filter: str) -> bool:
-    """True when ``envmap`` → ``to`` takes the lat-long step of RIM_SOURCES."""
-    return (filter == "area" and to.name == "sphere" and envmap.layout.name in RIM_SOURCES
-            and envmap.valid is None and not envmap.parts)  # fmt: skip
 
 
 def _resample(

@@ -20,7 +20,7 @@ from ..layouts.geometry import horizon_pitch
 from ..limits import check_size as bounded_size
 from . import kernels
 
-__all__ = ["FILTERS", "AREA_POINT_ONLY", "choose_filter", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
+__all__ = ["FILTERS", "AREA_POINT_ONLY", "choose_filter", "rim_to_mirror_ball", "RIM_SOURCES", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
            "check_samples", "check_guard", "check_mips", "check_conventions", "check_roughness",
            "output_channels", "check_size", "check_output", "output_layout"]  # fmt: skip
 
@@ -160,6 +160,18 @@ def choose_filter(source: EnvMap, guard, requested: str | None) -> str:
     if requested == "area" and reason:
         raise UsageError(f"the area filter does not take {reason} yet; use --filter bilinear")
     return requested
+
+
+#: Sources whose whole rim is one direction (−Z): the area filter cannot yet take them into a
+#: mirror ball, whose own rim is −Z too (a one-texel sun there moves by up to 1 %): such a
+#: conversion goes through an exact lat-long 1.5 times finer than the source at the horizon.
+RIM_SOURCES = ("sphere", "angular")
+
+
+def rim_to_mirror_ball(envmap: EnvMap, to: Layout, filter: str) -> bool:
+    """True when ``envmap`` → ``to`` takes the lat-long step of RIM_SOURCES."""
+    return (filter == "area" and to.name == "sphere" and envmap.layout.name in RIM_SOURCES
+            and envmap.valid is None and not envmap.parts)  # fmt: skip
 
 
 def check_samples(samples) -> int | None:
