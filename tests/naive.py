@@ -352,16 +352,18 @@ def uv_to_dir(name: str, u, v):
     return dirs, valid, face_density(family, face, a, b)
 
 
-def subsample_uv(name: str, n: int, samples: int, offset=(0.0, 0.0)):
+def subsample_uv(name: str, n: int, samples: int, offset=(0.0, 0.0), window=None):
     """(u, v) of S×S stratified sub-samples of every pixel, shape (H, W, S, S).
 
     ``offset`` moves the whole pixel grid by (dx, dy) pixels (used to build deliberately
-    shifted images that show a test can tell a half-pixel shift).
+    shifted images that show a test can tell a half-pixel shift); ``window = (row0, row1,
+    col0, col1)`` keeps that block of pixels only.
     """
     width, height = image_size(name, n)
+    row0, row1, col0, col1 = window or (0, height, 0, width)
     t = (np.arange(samples) + 0.5) / samples
-    u = (np.arange(width)[None, :, None, None] + t[None, None, None, :] + offset[0]) / width
-    v = (np.arange(height)[:, None, None, None] + t[None, None, :, None] + offset[1]) / height
+    u = (np.arange(col0, col1)[None, :, None, None] + t[None, None, None, :] + offset[0]) / width
+    v = (np.arange(row0, row1)[:, None, None, None] + t[None, None, :, None] + offset[1]) / height
     u, v = np.broadcast_arrays(u, v)
     return np.mod(u, 1.0), np.clip(v, 0.0, 1.0 - 1e-12)
 
@@ -422,12 +424,13 @@ def naive_convert(src, to: str, n: int, samples: int = 1, filt="bilinear", rotat
     return _weighted_mean(values, weights), valid.mean(axis=(2, 3))
 
 
-def pixel_average(name: str, n: int, radiance, samples: int = 8, offset=(0.0, 0.0)):
+def pixel_average(name: str, n: int, radiance, samples: int = 8, offset=(0.0, 0.0), window=None):
     """Solid-angle mean of ``radiance(dirs) -> (..., C)`` over every pixel of a layout.
 
-    The heavily supersampled analytic image that a perfect converter would produce.
+    The heavily supersampled analytic image that a perfect converter would produce; with
+    ``window = (row0, row1, col0, col1)``, only that block of it (the cost is the block's).
     """
-    u, v = subsample_uv(name, n, samples, offset)
+    u, v = subsample_uv(name, n, samples, offset, window)
     dirs, valid, density = uv_to_dir(name, u, v)
     values = np.asarray(radiance(np.where(valid[..., None], dirs, [0.0, 0.0, 1.0])), np.float64)
     return _weighted_mean(values, np.where(valid, density, 0.0))

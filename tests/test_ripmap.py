@@ -131,18 +131,32 @@ def _convert_without_rips(source, n, samples):
     return out
 
 
-def test_polar_caps_read_through_the_rip_map_match_the_pixel_average(stripes_source):
+#: Size of the cube-vcross the polar-cap tests make, and its +Y (top) and -Y (bottom) faces
+#: as (row0, row1, col0, col1).
+CAP_SIZE = 48
+CAPS = [(0, CAP_SIZE, CAP_SIZE, 2 * CAP_SIZE), (2 * CAP_SIZE, 3 * CAP_SIZE, CAP_SIZE, 2 * CAP_SIZE)]
+
+
+@pytest.fixture(scope="module")
+def caps_truth():
+    """The analytic pixel average of the stripes over the caps (24 × 24 sub-samples a pixel)."""
+    return [naive.pixel_average("cube-vcross", CAP_SIZE, _stripes, 24, window=cap) for cap in CAPS]
+
+
+def _caps_rms(pixels, truth) -> float:
+    """RMS error of a cube-vcross's caps against ``truth``."""
+    error = [pixels[r0:r1, c0:c1] - t for (r0, r1, c0, c1), t in zip(CAPS, truth, strict=True)]
+    return float(np.sqrt(np.mean(np.square(error))))
+
+
+def test_polar_caps_read_through_the_rip_map_match_the_pixel_average(stripes_source, caps_truth):
     """The top and bottom faces, read through the rip-map, are as close to the analytic pixel
     average as brute-force sub-sampling of level 0, and far from single-tap moiré."""
-    n = 48
+    n = CAP_SIZE
     source = envconv.EnvMap(stripes_source, "latlong")
-    truth = naive.pixel_average("cube-vcross", n, _stripes, samples=24)
-    caps = np.zeros(truth.shape[:2], bool)
-    caps[0:n, n : 2 * n] = True  # +Y, the top face
-    caps[2 * n : 3 * n, n : 2 * n] = True  # -Y, the bottom face
 
     def rms(pixels):
-        return float(np.sqrt(np.mean((pixels[caps] - truth[caps]) ** 2)))
+        return _caps_rms(pixels, caps_truth)
 
     with_rips = rms(envconv.convert(source, "cube-vcross", size=n, filter="bilinear").pixels)
     brute_force = rms(_convert_without_rips(source, n, 0))
@@ -209,20 +223,18 @@ def test_rows_filled_near_the_poles_give_the_pixels_of_a_full_rip_map(
 
 
 @pytest.mark.parametrize("to", ["cube-vcross", "sphere", "angular"])
-def test_pixels_that_could_reach_an_unfilled_row_read_level_0(stripes_source, monkeypatch, to):
+def test_pixels_that_could_reach_an_unfilled_row_read_level_0(
+    stripes_source, caps_truth, monkeypatch, to
+):
     """With only 4 rows filled at each pole (far fewer than the caps need), the kernel must
     never read the others: no NaN, and the polar caps stay as close to the analytic pixel
     average as brute-force sub-sampling."""
-    n = 48
+    n = CAP_SIZE
     source = envconv.EnvMap(stripes_source, "latlong")
     _poisoned_rips(monkeypatch, rows=4)
     got = envconv.convert(source, to, size=n, filter="bilinear").pixels
     assert np.isfinite(got).all()
     if to == "cube-vcross":
-        truth = naive.pixel_average("cube-vcross", n, _stripes, samples=24)
-        caps = np.zeros(truth.shape[:2], bool)
-        caps[0:n, n : 2 * n] = caps[2 * n : 3 * n, n : 2 * n] = True
-        brute_force = _convert_without_rips(source, n, 0)
-        rms = float(np.sqrt(np.mean((got[caps] - truth[caps]) ** 2)))
-        brute = float(np.sqrt(np.mean((brute_force[caps] - truth[caps]) ** 2)))
+        rms = _caps_rms(got, caps_truth)
+        brute = _caps_rms(_convert_without_rips(source, n, 0), caps_truth)
         assert rms <= max(1.25 * brute, 0.01), (rms, brute)
