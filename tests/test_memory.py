@@ -85,40 +85,27 @@ def _array_bytes(source, out) -> tuple[int, int]:
 @pytest.mark.parametrize(
     "out_name, resample",
     [
-        ("cross.exr", {"to": "cube-vcross", "size": 1024}),
-        ("cross-alpha.png", {"to": "cube-vcross", "size": 1024, "alpha": True}),
-    ],
-)
-def test_estimate_bounds_the_measured_peak(sources, out_name, resample):
-    """The model's estimate is at least the measured peak above the warm baseline and at most
-    twice it (it counts the write phase at a half-float copy, so it is an upper bound)."""
-    folder, tiny, mid = sources
-    warm, peak = _measure(folder, tiny, mid, out_name, resample)
-    source = envconv.read(mid)
-    options = {k: v for k, v in resample.items() if k != "to"}
-    estimate = envconv.resample.convert.memory_needed(source, resample["to"], **options)
-    measured = peak - warm
-    assert measured > 0
-    assert measured <= estimate <= 2 * measured, (measured, estimate)
-
-
-@linux
-@pytest.mark.parametrize(
-    "out_name, resample",
-    [
         ("plain.exr", {"to": "cube-vcross", "size": 1024}),
         ("same.exr", {"to": "latlong", "size": 2048}),
         ("sdr.png", {"to": "cube-vcross", "size": 1024}),
         ("alpha.exr", {"to": "cube-vcross", "size": 1024, "alpha": True}),
+        ("cross-alpha.png", {"to": "cube-vcross", "size": 1024, "alpha": True}),
     ],
 )
-def test_peak_is_within_issue_15_bound(sources, out_name, resample):
+def test_peak_is_within_issue_15_bound_and_the_estimate(sources, out_name, resample):
     """Peak RSS ≤ 1.25 × (input + output arrays) + the warm baseline (issue 15), for a
-    2048 × 1024 RGB float source: 24 MB in, 24–48 MB out. No further tolerance."""
+    4096 × 2048 RGB float source: 100 MB in, 150–200 MB out. No further tolerance. The model's
+    estimate is at least that measured peak and at most twice it (it counts the write phase at
+    a half-float copy, so it is an upper bound). One measurement serves both."""
     folder, tiny, mid = sources
     warm, peak = _measure(folder, tiny, mid, out_name, resample)
     read, written = _array_bytes(mid, folder / out_name)
-    assert peak - warm <= 1.25 * (read + written), (peak - warm, read, written)
+    measured = peak - warm
+    assert 0 < measured <= 1.25 * (read + written), (measured, read, written)
+    source = envconv.read(mid)
+    options = {k: v for k, v in resample.items() if k != "to"}
+    estimate = envconv.resample.convert.memory_needed(source, resample["to"], **options)
+    assert measured <= estimate <= 2 * measured, (measured, estimate)
 
 
 def test_blockwise_encoding_is_the_whole_image_encoding(monkeypatch):
