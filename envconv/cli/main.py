@@ -239,8 +239,9 @@ def _say(line: str) -> None:
 
 
 def _interrupted(exc: BaseException) -> None:
-    from ..engine.interrupt import describe, done, exit_status
+    from ..engine.interrupt import describe, done, exit_status, remove_live_temps
 
+    remove_live_temps()  # a temp made just before the signal, not yet in its writer's hands
     if done():  # not yet reported by the watchdog (envconv.engine.interrupt)
         click.echo(f"envconv: error: {describe(exc)}", err=True)
     sys.exit(exit_status(exc))

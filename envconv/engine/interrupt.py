@@ -35,7 +35,7 @@ import sys
 import threading
 
 __all__ = ["Interrupted", "install", "exit_status", "describe", "done", "report", "closing",
-           "die_with_parent", "GRACE"]  # fmt: skip
+           "die_with_parent", "remove_live_temps", "GRACE"]  # fmt: skip
 
 #: Seconds the main thread has to unwind after a signal before the watchdog ends the process.
 GRACE = 0.8
@@ -78,8 +78,10 @@ def done() -> bool:
 
 
 def report(exc: BaseException | None = None) -> int:
-    """Print the one line of an interruption (unless the watchdog has) on the stderr kept at
-    :func:`install`; return the exit status. For code that runs before click is loaded."""
+    """Remove this process's unfinished temporary files, print the one line of an
+    interruption (unless the watchdog has) on the stderr kept at :func:`install`; return the
+    exit status. For code that runs before click is loaded."""
+    remove_live_temps()
     if done():
         try:
             os.write(_state["stderr"], f"{_state['prefix']}{describe(exc)}\n".encode())
@@ -113,7 +115,10 @@ def _handler(signum, frame) -> None:
     raise Interrupted(signum)
 
 
-def _emergency(signum: int) -> None:
+def remove_live_temps() -> None:
+    """Remove this process's unfinished temporary files (:func:`envconv.io.temps.live_temps`):
+    what an interrupted run leaves when the signal lands between a temp's creation and the
+    code that would discard it."""
     from ..io.temps import forget, live_temps
 
     for path in live_temps():
@@ -122,6 +127,10 @@ def _emergency(signum: int) -> None:
         except OSError:
             pass
         forget(path)
+
+
+def _emergency(signum: int) -> None:
+    remove_live_temps()
     if done():
         try:
             os.write(

@@ -139,14 +139,27 @@ def temp_path(target: str, directory: str | None = None, token: str | None = Non
     token = token or new_token()
     for variant in range(16):
         path = side_path(target, token, variant=variant)
+        # Live before it exists: a signal raised (envconv.engine.interrupt) between the
+        # creation and the return must still find it among this process's unfinished files.
+        with _lock:
+            mine = path not in _live and path not in _held
+            if mine:
+                _live[path] = None
+        if not mine:  # this process's own file (a token drawn twice, two names cut to one)
+            continue
         try:
             fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0),
                          0o666)  # fmt: skip
         except FileExistsError:  # two long names cut to one stem, or a token drawn twice
+            _release(path)
             continue
+        except OSError:  # not made (an interruption keeps it live: it may have been)
+            _release(path)
+            raise
         locked = try_lock(fd, blocking=True)  # a cleaner testing it holds it for a moment
         if locked and not _same_file(path, fd):  # removed under us before we locked it
             os.close(fd)
+            _release(path)
             continue
         if not locked:
             os.close(fd)  # nothing to hold (on Windows, an open file cannot be renamed)
