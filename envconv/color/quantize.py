@@ -190,6 +190,8 @@ def quantize(pixels: np.ndarray, bit_depth: str, dither: bool = True, start: int
     if bit_depth == "float":
         return arr, ClipReport("float", int(arr.size), int(arr.shape[0] * arr.shape[1]))
     if bit_depth == "half":
+        if arr.size and -HALF_MAX <= arr.min() and arr.max() <= HALF_MAX:  # (NaN: False)
+            return arr.astype(np.float16), ClipReport("half", int(arr.size), int(arr.shape[0] * arr.shape[1]))  # fmt: skip
         fin = np.isfinite(arr)
         report = _clip_report("half", fin & (arr > HALF_MAX), fin & (arr < -HALF_MAX))
         out = arr
