@@ -8,6 +8,7 @@ formulas by dense midpoint integration; the park example's mean radiance is the 
 
 from __future__ import annotations
 
+import functools
 import math
 from pathlib import Path
 
@@ -231,6 +232,14 @@ def test_park_mean_radiance_is_kept_in_every_layout():
         np.testing.assert_allclose(got, mean, rtol=5e-3, err_msg=name)
 
 
+@functools.cache
+def _pixel_solid_angles(name, n, samples):
+    """naive.pixel_solid_angles, once per (layout, size, sub-samples) for the module."""
+    omega = naive.pixel_solid_angles(name, n, samples)
+    omega.flags.writeable = False
+    return omega
+
+
 @pytest.mark.parametrize("source_name", ["angular", "sphere"])
 @pytest.mark.parametrize("pitch", [0.0, 0.5, 20.0])
 def test_rim_source_into_a_mirror_ball_keeps_each_region(source_name, pitch):
@@ -241,8 +250,8 @@ def test_rim_source_into_a_mirror_ball_keeps_each_region(source_name, pitch):
     rng = np.random.default_rng(5)
     u, v = naive.subsample_uv(source_name, size, 1)
     z = naive.uv_to_dir(source_name, u, v)[0][:, :, 0, 0, 2]
-    omega_in = naive.pixel_solid_angles(source_name, size, 16)
-    omega_out = naive.pixel_solid_angles("sphere", n, 32)
+    omega_in = _pixel_solid_angles(source_name, size, 16)
+    omega_out = _pixel_solid_angles("sphere", n, 32)
     noise = rng.random(z.shape)
     for region in (z > 0, z < -0.5, z < -0.9):
         pixels = np.repeat((noise * region)[..., None], 3, axis=2).astype(np.float32)
