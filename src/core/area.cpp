@@ -115,8 +115,7 @@ struct DirectSink {
         if (kRows) {
             w = m * area + g * dy;
         } else {
-            TexelDensity t = model.texel(cell, ix, iy);
-            w = sign * (t.m * area + t.gx * dx + t.gy * dy);
+            w = sign * model.weight(cell, ix, iy, area, dx, dy);
         }
         if (period) {
             while (ix < 0) ix += period;
@@ -135,7 +134,14 @@ void direct_pixel(const SourceModel& model, int64_t cell, int64_t row0, int64_t 
     double area, mx, my;
     polygon_moments(xs, ys, n, area, mx, my);
     DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums};
-    integrate_any(xs, ys, n, sink, green);
+    if (kRows || model.g.family != kOctahedral) {
+        integrate_any(xs, ys, n, sink, green);
+        return;
+    }
+    thread_local std::vector<std::vector<double>> scratch;
+    split_at_kinks(model.g, cell, xs, ys, n, scratch, [&](const double* px, const double* py, int m) {
+        integrate_any(px, py, m, sink, green);
+    });
 }
 
 using DirectPixel = void (*)(const SourceModel&, int64_t, int64_t, int64_t, const double*,
@@ -568,6 +574,48 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
     }
 }
 
+// A folded source's pixels stay direct only where their whole footprint lies inside the
+// square: every point of their outline (corners and refinement points) more than a margin
+// inside it (past an edge the texels fold, which the direct path does not read), and no cone
+// point (area_map.h) in or on the pixel, which the general path puts on the footprint's
+// boundary exactly.
+void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t cell) {
+    const Conversion& cv = job.cv;
+    const Geometry& s = cv.src;
+    const double margin = 1e-6;
+    const double x0 = double((g.ref_cell % s.columns) * s.cell_width() + s.guard);
+    const double y0 = double((g.ref_cell / s.columns) * s.cell_height() + s.guard);
+    const double w = double(s.nx), h = double(s.n);
+    double cone_x[4], cone_y[4];
+    int cones = 0;
+    const double mid_x = (double(g.i0) + 0.5 * g.w) * cv.scale_x, mid_y = (double(g.j0) + 0.5 * g.h) * cv.scale_y;
+    for (int c = 0; c < job.sing.cones; ++c)
+        if (continued_point(cv.dst, cell, job.sing.cone_out[c], mid_x, mid_y, cone_x[cones], cone_y[cones]))
+            ++cones;
+    std::vector<double> xs, ys;
+    for (int j = 0; j < g.h; ++j) {
+        for (int i = 0; i < g.w; ++i) {
+            char& direct = ts.direct[size_t(j * g.w + i)];
+            if (!direct) continue;
+            const double px0 = double(g.i0 + i) * cv.scale_x, py0 = double(g.j0 + j) * cv.scale_y;
+            const double slack = 1e-3 * std::max(cv.scale_x, cv.scale_y);
+            for (int c = 0; c < cones && direct; ++c)
+                if (cone_x[c] >= px0 - slack && cone_x[c] <= px0 + cv.scale_x + slack &&
+                    cone_y[c] >= py0 - slack && cone_y[c] <= py0 + cv.scale_y + slack)
+                    direct = 0;
+            if (!direct) continue;
+            pixel_polygon(g, ts, i, j, xs, ys);
+            for (size_t k = 0; k < xs.size(); ++k) {
+                if (!(xs[k] > x0 + margin && xs[k] < x0 + w - margin && ys[k] > y0 + margin &&
+                      ys[k] < y0 + h - margin)) {
+                    direct = 0;
+                    break;
+                }
+            }
+        }
+    }
+}
+
 // The pixels of one tile inside output cell `cell` (grid: its corners): direct where the
 // corner grid allows (through edge integrals for lat-long and tennisball sources, else pixel
 // by pixel), the general path with the grid's corners elsewhere.
@@ -604,6 +652,7 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     ts.curved = usable && !straight;
     ts.edges.reset(grid.w, grid.h, sums.nch);
     if (ts.curved) refine_tile_edges(job, grid, ts, cell);
+    if (usable && (s.family == kOctahedral || s.family == kEqualArea)) fold_guard(job, grid, ts, cell);
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
     while (band_j0 < grid.h) {
@@ -717,18 +766,20 @@ void sub_pixel_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, Pi
     fine_sp.sums = &sums;
     AreaJob fine_job{fine, job.model, job.sing, sub, 1};
     area_rows(fine_job, j0 * n, j1 * n, fine_sp, sums, grid, ts);
+    std::vector<double> acc(static_cast<size_t>(nch));  // any number of channels (a fixed 64 overran)
     for (int64_t j = j0; j < j1; ++j) {
         for (int64_t i = 0; i < job.out.width; ++i) {
-            double w = 0.0, acc[64] = {};
+            double w = 0.0;
+            std::fill(acc.begin(), acc.end(), 0.0);
             for (int64_t b = 0; b < n; ++b) {
                 for (int64_t a = 0; a < n; ++a) {
                     int64_t k = ((j - j0) * n + b) * width + i * n + a;
                     double wk = weights[size_t(k)];
                     w += wk;
-                    for (int64_t c = 0; c < nch && c < 64; ++c) acc[c] += wk * double(buffer[size_t(k * nch + c)]);
+                    for (int64_t c = 0; c < nch; ++c) acc[size_t(c)] += wk * double(buffer[size_t(k * nch + c)]);
                 }
             }
-            store_sums(job.out, i, j, w, acc, pixel_coverage(job.cv, job.out, i, j));
+            store_sums(job.out, i, j, w, acc.data(), pixel_coverage(job.cv, job.out, i, j));
         }
     }
 }
