@@ -576,9 +576,8 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
 
 // A folded source's pixels stay direct only where their whole footprint lies inside the
 // square: every point of their outline (corners and refinement points) more than a margin
-// inside it (past an edge the texels fold, which the direct path does not read), and no cone
-// point (area_map.h) in or on the pixel, which the general path puts on the footprint's
-// boundary exactly.
+// inside it (past an edge the texels fold, which the direct path does not read). Tiles that
+// hold a cone point take the general path whole (cone_in_box).
 void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t cell) {
     const Conversion& cv = job.cv;
     const Geometry& s = cv.src;
@@ -586,23 +585,10 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
     const double x0 = double((g.ref_cell % s.columns) * s.cell_width() + s.guard);
     const double y0 = double((g.ref_cell / s.columns) * s.cell_height() + s.guard);
     const double w = double(s.nx), h = double(s.n);
-    double cone_x[4], cone_y[4];
-    int cones = 0;
-    const double mid_x = (double(g.i0) + 0.5 * g.w) * cv.scale_x, mid_y = (double(g.j0) + 0.5 * g.h) * cv.scale_y;
-    for (int c = 0; c < job.sing.cones; ++c)
-        if (continued_point(cv.dst, cell, job.sing.cone_out[c], mid_x, mid_y, cone_x[cones], cone_y[cones]))
-            ++cones;
     std::vector<double> xs, ys;
     for (int j = 0; j < g.h; ++j) {
         for (int i = 0; i < g.w; ++i) {
             char& direct = ts.direct[size_t(j * g.w + i)];
-            if (!direct) continue;
-            const double px0 = double(g.i0 + i) * cv.scale_x, py0 = double(g.j0 + j) * cv.scale_y;
-            const double slack = 1e-3 * std::max(cv.scale_x, cv.scale_y);
-            for (int c = 0; c < cones && direct; ++c)
-                if (cone_x[c] >= px0 - slack && cone_x[c] <= px0 + cv.scale_x + slack &&
-                    cone_y[c] >= py0 - slack && cone_y[c] <= py0 + cv.scale_y + slack)
-                    direct = 0;
             if (!direct) continue;
             pixel_polygon(g, ts, i, j, xs, ys);
             for (size_t k = 0; k < xs.size(); ++k) {
@@ -716,6 +702,20 @@ bool inside_disk(const Geometry& d, int64_t cell, double x0, double y0, double x
     return fx * fx + fy * fy <= unit * unit;
 }
 
+// True when a cone point of a folded source (area_map.h) lands in or on the output box
+// [x0, x1] x [y0, y1] of `cell` (within a thousandth of a pixel).
+bool cone_in_box(const AreaJob& job, int64_t cell, double x0, double y0, double x1, double y1) {
+    const Conversion& cv = job.cv;
+    const double slack = 1e-3 * std::max(cv.scale_x, cv.scale_y);
+    for (int c = 0; c < job.sing.cones; ++c) {
+        double x, y;
+        if (!continued_point(cv.dst, cell, job.sing.cone_out[c], 0.5 * (x0 + x1), 0.5 * (y0 + y1), x, y))
+            continue;
+        if (x >= x0 - slack && x <= x1 + slack && y >= y0 - slack && y <= y1 + slack) return true;
+    }
+    return false;
+}
+
 // Output rows [j0, j1): tiles of up to kAreaTile x kAreaTile pixels, each inside one output
 // cell through tile_pixels; a tile across cell edges pixel by pixel.
 void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
@@ -734,6 +734,10 @@ void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSu
         bool direct = direct_allowed.load(std::memory_order_relaxed);
         int64_t cell = direct ? rect_cell(d, x0, y0, x1, y1) : -1;
         bool regular = cell >= 0 && d.cell_face[cell] >= 0 && (!d.disk() || inside_disk(d, cell, x0, y0, x1, y1));
+        // A tile around a folded source's cone point has no one chart: going around the
+        // point flips the source's copy (four of them can add up to none, so the grid's own
+        // check may pass). Every pixel of it takes the general path.
+        regular = regular && !cone_in_box(job, cell, x0, y0, x1, y1);
         if (!regular) {
             slow_block(job, sp, sums, i0, j0, i1, j1);
             continue;

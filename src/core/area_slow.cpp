@@ -345,17 +345,37 @@ bool side_path(SlowPath& sp, const Piece& p, int k, int64_t cell, double x, doub
 
 // The reference for the vertex after cone vertex k: every point and its copy turned by half
 // a turn about the cone point lie equally far from it, so the next vertex cannot be placed
-// near the cone's image. A probe inside the piece next to the cone, placed near the footprint's
-// point (prev_x, prev_y) before the cone, lies inside the footprint's corner there (a quarter
-// turn at most), and the next vertex is placed near it.
+// near the cone's image. Probes inside the piece close to the cone, swept in eight steps from
+// its edge before to its edge after, each placed near the one before (from (prev_x, prev_y),
+// the footprint's point before the cone), carry the side across: a step turns by an eighth of
+// the piece's corner at most (a quarter turn in the source, where the output's own map is
+// folded there too), and the last lies beside the edge after.
 bool cone_reference(const SlowPath& sp, const Piece& p, int k, int64_t cell, double prev_x,
                     double prev_y, double& x, double& y) {
-    double cx, cy;
-    piece_centre(p, cx, cy);
-    const double tau = 0.05;
-    Vec3 d = output_direction(sp.cv, p.cell, p.v[k].x + tau * (cx - p.v[k].x),
-                              p.v[k].y + tau * (cy - p.v[k].y));
-    return continued_point(sp.cv.src, cell, d, prev_x, prev_y, x, y);
+    const int before = (k + p.n - 1) % p.n;
+    const double px = p.v[k].x, py = p.v[k].y;
+    double ax, ay, bx, by;
+    edge_point(p, before, 1.0 - 1e-3, ax, ay);
+    edge_point(p, k, 1e-3, bx, by);
+    const double r = 0.5 * std::min(std::hypot(ax - px, ay - py), std::hypot(bx - px, by - py));
+    if (!(r > 0.0)) return false;
+    const double a0 = std::atan2(ay - py, ax - px), a1 = std::atan2(by - py, bx - px);
+    // The piece runs with a positive shoelace area: its inside turns from the edge after to
+    // the edge before by increasing angle.
+    double turn = a0 - a1;
+    turn -= 2.0 * kPi * std::floor(turn / (2.0 * kPi));
+    x = prev_x;
+    y = prev_y;
+    const int steps = 8;
+    for (int m = 1; m < steps; ++m) {
+        const double ang = a0 - turn * double(m) / double(steps);
+        Vec3 d = output_direction(sp.cv, p.cell, px + r * std::cos(ang), py + r * std::sin(ang));
+        double qx, qy;
+        if (!continued_point(sp.cv.src, cell, d, x, y, qx, qy)) return false;
+        x = qx;
+        y = qy;
+    }
+    return true;
 }
 
 // The footprint of the piece in source cell `cell`, into sp.xs, sp.ys; false when it cannot
