@@ -266,6 +266,39 @@ def test_sun_of_a_folded_square_keeps_its_energy(source_name, size, to, ratio, r
     np.testing.assert_allclose(energy, truth, rtol=5e-3)
 
 
+def _disk_texel_areas(n, rows, cols, steps=4000):
+    """Area (in texels) of each texel (rows, cols) of an n-px square inside its inscribed disk:
+    the disk's column height clipped to the texel, integrated across it (midpoints)."""
+    x = cols[:, None] + (np.arange(steps) + 0.5) / steps - 0.5 * n
+    half = np.sqrt(np.maximum(0.25 * n * n - x * x, 0.0))
+    top, bottom = rows[:, None] - 0.5 * n, rows[:, None] + 1 - 0.5 * n
+    height = np.clip(np.minimum(half, bottom) - np.maximum(-half, top), 0.0, None)
+    return height.mean(axis=1)
+
+
+def test_sun_on_a_mirror_ball_rim_keeps_its_energy():
+    """Suns on the texels a 32-px mirror ball's rim cuts (each in a channel of its own) into its
+    default 50 × 25 lat-long, whose −Z (the ball's whole rim) lies inside the side of a pixel:
+    each keeps the solid angle of its part inside the disk (4 sr per unit area there), to
+    0.2 % of a whole texel's. A pixel with −Z on a side was integrated directly, along the chord
+    across the disk instead of around its rim: up to 6 % of such a sun was lost."""
+    n = 32
+    jj, ii = np.mgrid[0:n, 0:n]
+    corner = np.stack([(ii + dx - n / 2) ** 2 + (jj + dy - n / 2) ** 2 for dx in (0, 1)
+                       for dy in (0, 1)]) < (n / 2) ** 2  # fmt: skip
+    rows, cols = np.nonzero(corner.any(axis=0) & ~corner.all(axis=0))
+    pixels = np.zeros((n, n, len(rows)), np.float32)
+    pixels[rows, cols, np.arange(len(rows))] = SUN
+    result = envconv.convert(envconv.EnvMap(pixels, "sphere"), "latlong")
+    assert result.size == 25
+    height = result.size
+    omega = _texel_solid_angle(height, np.arange(height))[:, None, None]
+    energy = (result.pixels.astype(np.float64) * omega).sum(axis=(0, 1))
+    texel = 4.0 * (2.0 / n) ** 2
+    truth = SUN * texel * _disk_texel_areas(n, rows, cols)
+    np.testing.assert_allclose(energy, truth, atol=2e-3 * SUN * texel)
+
+
 def test_more_than_64_channels_with_sub_pixels():
     """70 channels at samples 2: every channel of a constant map stays its constant (the
     sub-pixel sums were held in 64 slots)."""
