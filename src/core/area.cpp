@@ -714,8 +714,10 @@ bool inside_disk(const Geometry& d, int64_t cell, double x0, double y0, double x
     return fx * fx + fy * fy <= unit * unit;
 }
 
-// True when a cone point of a folded source (area_map.h) lands in or on the output box
-// [x0, x1] x [y0, y1] of `cell` (within a thousandth of a pixel).
+// True when a cone point of a folded source (area_map.h) lands inside the output box
+// [x0, x1] x [y0, y1] of `cell` (more than a thousandth of a pixel from its edges). A tile
+// with one on its outline does not wind around it; should its corners be placed in two copies
+// about it, the grid's far-corner check fails and the tile goes pixel by pixel anyway.
 bool cone_in_box(const AreaJob& job, int64_t cell, double x0, double y0, double x1, double y1) {
     const Conversion& cv = job.cv;
     const double slack = 1e-3 * std::max(cv.scale_x, cv.scale_y);
@@ -723,7 +725,7 @@ bool cone_in_box(const AreaJob& job, int64_t cell, double x0, double y0, double 
         double x, y;
         if (!continued_point(cv.dst, cell, job.sing.cone_out[c], 0.5 * (x0 + x1), 0.5 * (y0 + y1), x, y))
             continue;
-        if (x >= x0 - slack && x <= x1 + slack && y >= y0 - slack && y <= y1 + slack) return true;
+        if (x > x0 + slack && x < x1 - slack && y > y0 + slack && y < y1 - slack) return true;
     }
     return false;
 }
