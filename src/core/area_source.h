@@ -290,9 +290,29 @@ struct SourceModel {
         double m, gx, gy, cx, cy;
     };
 
-    // kink_lines(...) > 0, cheaply: the texel's (a, b) box against the lines a, b = integer
-    // and a +- b = odd integer.
+    // kink_lines(...) > 0, cheaply. In pixels (u, v) from the square's corner, the lines are
+    // u, v in (N/2) Z and u +- v in (N/2) (2Z + 1): texel (i, j) is crossed by u = L inside iff
+    // 2L = 2i + 1 (so N odd), by u + v = L iff 2L is one of 2(i + j) + 1 ... 3, by u - v = L
+    // iff 2L is one of 2(i - j) - 1 ... 1 (integers, so no rounding).
     bool octahedral_kink(int64_t cell, int64_t ix, int64_t iy) const {
+        if (g.cell_turns[cell] == 0 && g.nx == g.n) {
+            const int64_t n = g.n;
+            const int64_t i = ix - (cell % g.columns) * g.cell_width() - g.guard;
+            const int64_t j = iy - (cell / g.columns) * g.cell_height() - g.guard;
+            auto line = [n](int64_t twice) { return twice % n == 0; };  // 2L = m N
+            auto odd_line = [n](int64_t twice) { return twice % n == 0 && (twice / n) % 2 != 0; };
+            if (line(2 * i + 1) || line(2 * j + 1)) return true;
+            const int64_t s2 = 2 * (i + j), d2 = 2 * (i - j);
+            for (int64_t t = 1; t <= 3; ++t)
+                if (odd_line(s2 + t)) return true;
+            for (int64_t t = -1; t <= 1; ++t)
+                if (odd_line(d2 + t)) return true;
+            return false;
+        }
+        return float_kink(cell, ix, iy);
+    }
+
+    bool float_kink(int64_t cell, int64_t ix, int64_t iy) const {
         double a0, b0, a1, b1;
         cell_local(g, cell, double(ix), double(iy), a0, b0);
         cell_local(g, cell, double(ix + 1), double(iy + 1), a1, b1);
@@ -491,10 +511,19 @@ void split_at_kinks(const Geometry& g, int64_t cell, const double* xs, const dou
         part(xs, ys, n);
         return;
     }
+    // The lines that cross the polygon's box (a superset: a line that misses the polygon
+    // leaves one side empty).
+    double xmin = xs[0], xmax = xs[0], ymin = ys[0], ymax = ys[0];
+    for (int k = 1; k < n; ++k) {
+        xmin = std::min(xmin, xs[k]);
+        xmax = std::max(xmax, xs[k]);
+        ymin = std::min(ymin, ys[k]);
+        ymax = std::max(ymax, ys[k]);
+    }
     double lo[4] = {1e300, 1e300, 1e300, 1e300}, hi[4] = {-1e300, -1e300, -1e300, -1e300};
-    for (int k = 0; k < n; ++k) {
+    for (int q = 0; q < 4; ++q) {
         double a, b;
-        cell_local(g, cell, xs[k], ys[k], a, b);
+        cell_local(g, cell, q & 1 ? xmax : xmin, q & 2 ? ymax : ymin, a, b);
         const double v[4] = {a, b, a + b, a - b};
         for (int f = 0; f < 4; ++f) {
             lo[f] = std::min(lo[f], v[f]);
