@@ -148,9 +148,25 @@ DirectPixel direct_pixel_for(bool rows, int64_t nch) {
     return nch == 3 ? direct_pixel<false, 3> : nch == 4 ? direct_pixel<false, 4> : direct_pixel<false, 0>;
 }
 
+// True when the box [xmin, xmax] x [ymin, ymax] of tennisball band `cell` (its continued
+// coordinates) holds only directions the band owns (layouts.h): the two bands overlap, and
+// past |phi| = 90 deg a band owns only where |sin phi| cos theta >= sqrt(2)/2, least at the
+// box's largest |phi| and |theta|. The general path reads the owner's texels; so must the
+// direct path, or the overlap's texels would be read by both bands' pixels, or by neither.
+bool tennisball_owned(const Geometry& g, int64_t cell, double xmin, double ymin, double xmax,
+                      double ymax) {
+    double a0, b0, a1, b1;
+    cell_local(g, cell, xmin, ymin, a0, b0);
+    cell_local(g, cell, xmax, ymax, a1, b1);
+    const double phi = std::max(std::fabs(a0), std::fabs(a1)) * tennisball::kPhiHalf;
+    const double theta = std::max(std::fabs(b0), std::fabs(b1)) * tennisball::kThetaHalf;
+    return phi < 0.5 * kPi || std::sin(phi) * std::cos(theta) > tennisball::kHalfSqrt2 + 1e-9;
+}
+
 // True when the quad (xs, ys) of source cell `cell` can be integrated as it is: every texel it
-// touches is one the cell holds (a lat-long's columns wrap), no singular point is inside or on
-// it, and it does not wind around a lat-long pole.
+// touches is one the cell holds (a lat-long's columns wrap, a tennisball band owns its
+// directions), no singular point is inside or on it, and it does not wind around a lat-long
+// pole.
 bool direct_quad(const Geometry& g, int64_t cell, const double* xs, const double* ys) {
     double xmin = std::min({xs[0], xs[1], xs[2], xs[3]}), xmax = std::max({xs[0], xs[1], xs[2], xs[3]});
     double ymin = std::min({ys[0], ys[1], ys[2], ys[3]}), ymax = std::max({ys[0], ys[1], ys[2], ys[3]});
@@ -167,6 +183,7 @@ bool direct_quad(const Geometry& g, int64_t cell, const double* xs, const double
         return true;
     }
     if (!(xmin > x0 + margin && xmax < x0 + w - margin)) return false;
+    if (g.family == kTennisball) return tennisball_owned(g, cell, xmin, ymin, xmax, ymax);
     if (!g.disk()) return true;
     double r = 0.5 * h, cx = x0 + r, cy = y0 + r;
     double turn = 0.0;
@@ -355,7 +372,8 @@ bool whole_tile_direct(const Geometry& g, const CornerGrid& grid) {
     double w = double(g.nx), h = double(g.n);
     if (!(ymin > y0 + margin && ymax < y0 + h - margin)) return false;
     if (g.family == kLatlong && g.guard == 0) return xmax - xmin < 0.5 * w;
-    return xmin > x0 + margin && xmax < x0 + w - margin;
+    return xmin > x0 + margin && xmax < x0 + w - margin &&
+           tennisball_owned(g, cell, xmin, ymin, xmax, ymax);
 }
 
 // How the tile took the sides of pixel (i, j) (for the general path, in the order (i, j) ->
