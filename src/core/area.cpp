@@ -685,18 +685,26 @@ bool inside_disk(const Geometry& d, int64_t cell, double x0, double y0, double x
     return fx * fx + fy * fy <= unit * unit;
 }
 
-// Output rows [j0, j1): tiles of up to kAreaTile x kAreaTile pixels, each inside one output
-// cell through tile_pixels; a tile across cell edges pixel by pixel.
-void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
-               CornerGrid& grid, TileScratch& ts) {
+// The end (exclusive) of the run of output pixels from pixel i (scale level-0 pixels each)
+// that lie in the same row or column of cells (cell level-0 pixels each), at least i + 1.
+int64_t cell_run_end(int64_t i, double scale, int64_t cell) {
+    int64_t c = floor_index(double(i) * scale / double(cell));
+    return std::max(i + 1, int64_t(std::floor(double(c + 1) * double(cell) / scale)));
+}
+
+// Output rows [j0, j1), all in one row of cells: tiles of up to kAreaTile x kAreaTile pixels,
+// ending where a column of cells does, each inside one output cell through tile_pixels; a tile
+// across cell edges (a pixel that straddles one) pixel by pixel.
+void area_tiles(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
+                CornerGrid& grid, TileScratch& ts) {
     const Conversion& cv = job.cv;
     const Geometry& d = cv.dst;
     const ResampleOutput& out = job.out;
     // The right column of the last tile mapped, for the next tile of the same cell.
     std::vector<SourcePoint>& shared = ts.column;
     int64_t shared_cell = -1, shared_i = -1;
-    for (int64_t i0 = 0; i0 < out.width; i0 += kAreaTile) {
-        int64_t i1 = std::min(i0 + kAreaTile, out.width);
+    for (int64_t i0 = 0, i1; i0 < out.width; i0 = i1) {
+        i1 = std::min({i0 + kAreaTile, out.width, cell_run_end(i0, cv.scale_x, d.cell_width())});
         double x0 = double(i0) * cv.scale_x, y0 = double(j0) * cv.scale_y;
         double x1 = double(i1) * cv.scale_x, y1 = double(j1) * cv.scale_y;
         if (!cv.fill && out.zeroed && tile_in_empty_cell(d, x0, y0, x1, y1)) continue;
@@ -714,6 +722,17 @@ void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSu
         shared_cell = cell;
         shared_i = i1;
         tile_pixels(job, sp, sums, grid, ts, cell, regular);
+    }
+}
+
+// Output rows [j0, j1): split where a row of cells ends (so that a band across a cell edge
+// still has direct tiles), each part through area_tiles.
+void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
+               CornerGrid& grid, TileScratch& ts) {
+    const Conversion& cv = job.cv;
+    for (int64_t a = j0, b; a < j1; a = b) {
+        b = std::min(j1, cell_run_end(a, cv.scale_y, cv.dst.cell_height()));
+        area_tiles(job, a, b, sp, sums, grid, ts);
     }
 }
 
