@@ -86,9 +86,32 @@ void slow_block(const AreaJob& job, SlowPath& sp, PixelSums& sums, int64_t i0, i
     }
 }
 
+// The density models (SourceModel::texel) of a box of texels of one source cell, each
+// computed on its first use: a tile's direct pixels share their texels (about four pieces
+// each at 1:1), and a texel's model costs four maps and four densities.
+struct DensityCache {
+    int64_t cell = -1, c0 = 0, r0 = 0, w = 0, h = 0;
+    std::vector<TexelDensity> t;  // m NaN: not computed yet
+    void reset(int64_t cell_, int64_t c0_, int64_t r0_, int64_t c1, int64_t r1) {
+        cell = cell_;
+        c0 = c0_;
+        r0 = r0_;
+        w = c1 - c0 + 1;
+        h = r1 - r0 + 1;
+        t.assign(size_t(w * h), TexelDensity{std::nan(""), 0.0, 0.0});
+    }
+    TexelDensity get(const SourceModel& model, int64_t ix, int64_t iy) {
+        const uint64_t dx = uint64_t(ix - c0), dy = uint64_t(iy - r0);
+        if (dx >= uint64_t(w) || dy >= uint64_t(h)) return model.texel(cell, ix, iy);
+        TexelDensity& e = t[size_t(dy * uint64_t(w) + dx)];
+        if (std::isnan(e.m)) e = model.texel(cell, ix, iy);
+        return e;
+    }
+};
+
 // Sink of green.h for the direct path: texels read as they are (a lat-long's columns modulo its
 // width), weighted by a lat-long or tennisball row's exact solid angle (kRows) or the density
-// model; NCH channels (0: sums.nch).
+// model (through the tile's cache); NCH channels (0: sums.nch).
 template <bool kRows, int NCH>
 struct DirectSink {
     static constexpr bool kMomentX = !kRows;
@@ -96,6 +119,7 @@ struct DirectSink {
     int64_t cell, row0, period;
     double sign;
     PixelSums& sums;
+    DensityCache& cache;
     double m = 0.0, g = 0.0;
     // True when rows r0 ... r1 all hold a flat density model (no y moments needed).
     bool flat(int64_t r0, int64_t r1) const {
@@ -115,7 +139,7 @@ struct DirectSink {
         if (kRows) {
             w = m * area + g * dy;
         } else {
-            TexelDensity t = model.texel(cell, ix, iy);
+            TexelDensity t = cache.get(model, ix, iy);
             w = sign * (t.m * area + t.gx * dx + t.gy * dy);
         }
         if (period) {
@@ -131,15 +155,16 @@ struct DirectSink {
 
 template <bool kRows, int NCH>
 void direct_pixel(const SourceModel& model, int64_t cell, int64_t row0, int64_t period,
-                  const double* xs, const double* ys, int n, PixelSums& sums, GreenScratch& green) {
+                  const double* xs, const double* ys, int n, PixelSums& sums, GreenScratch& green,
+                  DensityCache& cache) {
     double area, mx, my;
     polygon_moments(xs, ys, n, area, mx, my);
-    DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums};
+    DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums, cache};
     integrate_any(xs, ys, n, sink, green);
 }
 
 using DirectPixel = void (*)(const SourceModel&, int64_t, int64_t, int64_t, const double*,
-                             const double*, int, PixelSums&, GreenScratch&);
+                             const double*, int, PixelSums&, GreenScratch&, DensityCache&);
 
 DirectPixel direct_pixel_for(bool rows, int64_t nch) {
     if (rows) {
@@ -203,6 +228,7 @@ struct TileScratch {
     SidePath sides[4];                // how the tile took a general-path pixel's sides
 
     PrefixTable table;
+    DensityCache density;  // the tile's texel densities (sources without exact rows)
     EdgeMemo edges;
 };
 
@@ -586,6 +612,37 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
     }
 }
 
+// Set the tile's density cache to the texel box of its direct pixels (their corners and, in a
+// curved tile, their polylines), or to no box where there are none or it is too large.
+void density_box(const CornerGrid& g, TileScratch& ts) {
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+    for (int j = 0; j < g.h; ++j) {
+        for (int i = 0; i < g.w; ++i) {
+            if (!ts.direct[size_t(j * g.w + i)]) continue;
+            for (int q = 0; q < 4; ++q) {
+                size_t k = g.at(i + (q & 1), j + (q >> 1));
+                xmin = std::min(xmin, g.x[k]);
+                xmax = std::max(xmax, g.x[k]);
+                ymin = std::min(ymin, g.y[k]);
+                ymax = std::max(ymax, g.y[k]);
+            }
+        }
+    }
+    for (size_t k = 0; ts.curved && k < ts.edges.px.size(); ++k) {
+        xmin = std::min(xmin, ts.edges.px[k]);
+        xmax = std::max(xmax, ts.edges.px[k]);
+        ymin = std::min(ymin, ts.edges.py[k]);
+        ymax = std::max(ymax, ts.edges.py[k]);
+    }
+    if (!(xmin <= xmax && ymin <= ymax) ||
+        (xmax - xmin + 2.0) * (ymax - ymin + 2.0) > double(kMaxTableTexels)) {
+        ts.density.reset(g.ref_cell, 0, 0, -1, -1);
+        return;
+    }
+    ts.density.reset(g.ref_cell, floor_texel(xmin), floor_texel(ymin), floor_texel(xmax),
+                     floor_texel(ymax));
+}
+
 // The pixels of one tile inside output cell `cell` (grid: its corners): direct where the
 // corner grid allows (through edge integrals for lat-long and tennisball sources, else pixel
 // by pixel), the general path with the grid's corners elsewhere.
@@ -622,6 +679,7 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     ts.curved = usable && !straight;
     ts.edges.reset(grid.w, grid.h, sums.nch);
     if (ts.curved) refine_tile_edges(job, grid, ts, cell);
+    if (!rows) density_box(grid, ts);
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
     while (band_j0 < grid.h) {
@@ -652,7 +710,7 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                         sums.weight = 0.0;
                         pixel_polygon(grid, ts, i, j, sp.xs, sp.ys);
                         direct(job.model, grid.ref_cell, row0, period, sp.xs.data(), sp.ys.data(),
-                               int(sp.xs.size()), sums, sp.green);
+                               int(sp.xs.size()), sums, sp.green, ts.density);
                     }
                 } else {
                     std::fill(sums.acc, sums.acc + sums.nch, 0.0);
