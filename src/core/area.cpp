@@ -502,9 +502,10 @@ double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx,
     const int64_t step = di ? 1 : g.w + 1, across = di ? g.w + 1 : 1;
     const int64_t k0 = int64_t(g.at(i, j)), k1 = k0 + step;
     const int64_t lo = line > 0 ? k0 - across : k0, hi = line < m ? k0 + across : k0;
-    const double lines = double(hi - lo) / double(across);
+    // Over the number of spacings between lo and hi (1 or 2): a product, exactly the quotient.
+    const double per_line = line > 0 && line < m ? 0.5 : 1.0;
     double tx = x[k1] - x[k0], ty = y[k1] - y[k0];
-    double sx = (x[hi] - x[lo]) / lines, sy = (y[hi] - y[lo]) / lines;
+    double sx = (x[hi] - x[lo]) * per_line, sy = (y[hi] - y[lo]) * per_line;
     double spacing = std::fabs(tx * sy - ty * sx);
     dx = dy = 0.0;
     if (!(spacing > 0.0)) return -1.0;
@@ -561,9 +562,13 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
             if (bend >= 0.0 && bend <= 0.5 * kChordTol) return;
             if (bend >= 0.0 && bend <= kParabolaBend * kChordTol) {
                 // P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second difference.
-                for (double t : {0.25, 0.5, 0.75}) {
-                    e.px.push_back(g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * dx);
-                    e.py.push_back(g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * dy);
+                const size_t at = e.px.size();
+                e.px.resize(at + 3);
+                e.py.resize(at + 3);
+                for (int q = 0; q < 3; ++q) {
+                    const double t = 0.25 * double(q + 1);
+                    e.px[at + size_t(q)] = g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * dx;
+                    e.py[at + size_t(q)] = g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * dy;
                 }
                 e.refine[index] = 2;
                 return;
