@@ -6,10 +6,12 @@ Each case converts the same in-memory 2048 × 1024 lat-long (the park example up
 cube-vcross 512, the default one shot's resample, with ``envconv.convert``: the area filter
 (the default: S = 1, each pixel integrated exactly), the area filter with ``samples=4`` (4 × 4
 sub-pixels, each integrated exactly), and the bilinear point kernel at S = 1, S = 4 and
-``auto`` (the default before the area filter). Rounds run every case once, in a rotating order,
-after one warm-up round; the table gives each case's median and its ratio to the point
-kernel's S = 1 and auto medians of the same rounds, so a machine that slows down during the
-run slows every case alike.
+``auto`` (the default before the area filter). One more case converts a paraboloid made from
+the same lat-long (bilinear, its default size, before the rounds) to the same cube: a source
+whose area filter goes pixel by pixel through the density model rather than lat-long rows.
+Rounds run every case once, in a rotating order, after one warm-up round; the table gives each
+case's median and its ratio to the point kernel's S = 1 and auto medians of the same rounds,
+so a machine that slows down during the run slows every case alike.
 """
 
 from __future__ import annotations
@@ -21,29 +23,34 @@ import envconv
 
 __all__ = ["CASES", "bench_filters"]
 
-#: (label, convert keyword arguments)
+#: (label, source layout, convert keyword arguments)
 CASES = [
-    ("area (default)", {"filter": "area"}),
-    ("area samples=4", {"filter": "area", "samples": 4}),
-    ("bilinear S=1", {"filter": "bilinear", "samples": 1}),
-    ("bilinear S=4", {"filter": "bilinear", "samples": 4}),
-    ("bilinear auto (old default)", {"filter": "bilinear", "samples": "auto"}),
+    ("area (default)", "latlong", {"filter": "area"}),
+    ("area samples=4", "latlong", {"filter": "area", "samples": 4}),
+    ("bilinear S=1", "latlong", {"filter": "bilinear", "samples": 1}),
+    ("bilinear S=4", "latlong", {"filter": "bilinear", "samples": 4}),
+    ("bilinear auto (old default)", "latlong", {"filter": "bilinear", "samples": "auto"}),
+    ("area, paraboloid source", "paraboloid", {"filter": "area"}),
 ]
 
 
 def bench_filters(source: envconv.EnvMap, rounds: int = 9, threads: int | None = None) -> None:
     """Print the median time of every case of CASES over ``rounds`` interleaved rounds."""
-    times: dict[str, list[float]] = {label: [] for label, _ in CASES}
+    sources = {
+        "latlong": source,
+        "paraboloid": envconv.convert(source, "paraboloid", filter="bilinear"),
+    }
+    times: dict[str, list[float]] = {label: [] for label, _, _ in CASES}
     for r in range(rounds + 1):
         order = CASES[r % len(CASES) :] + CASES[: r % len(CASES)]
-        for label, kwargs in order:
+        for label, layout, kwargs in order:
             start = time.perf_counter()
-            envconv.convert(source, "cube-vcross", size=512, threads=threads, **kwargs)
+            envconv.convert(sources[layout], "cube-vcross", size=512, threads=threads, **kwargs)
             if r:  # round 0 warms up
                 times[label].append(time.perf_counter() - start)
     medians = {label: statistics.median(t) for label, t in times.items()}
     s1, auto = medians["bilinear S=1"], medians["bilinear auto (old default)"]
-    print(f"lat-long 2048x1024 -> cube-vcross 512, {rounds} interleaved rounds, "
+    print(f"lat-long 2048x1024 (and a paraboloid of it) -> cube-vcross 512, {rounds} interleaved rounds, "
           f"threads={threads or 'all'}")  # fmt: skip
     for label, median in medians.items():
         print(f"  {label:28s} {median * 1e3:8.1f} ms   x{median / s1:5.2f} of bilinear S=1"

@@ -2,8 +2,10 @@
 
 The continued direction of every pixel is computed here from docs/geometry.md ("Guard ring"),
 with numpy and the cell tables of ``naive.GRIDS``; nothing in envconv's geometry is called.
-Conversions use one sub-sample per pixel (the pixel centre), so each output pixel must equal
-the source environment in its pixel centre's continued direction.
+Conversions use the point kernel with one sub-sample per pixel (the pixel centre), so each
+output pixel must equal the source environment in its pixel centre's continued direction. The
+area filter's ring (the default) is tested at the end: its cells are the ringless map's, its
+ring what a bilinear lookup of that map reads across the edge.
 """
 
 import math
@@ -100,7 +102,7 @@ TOLERANCE = 2e-3  # bilinear reconstruction of a 256-row lat-long of a smooth en
 @pytest.mark.parametrize("name", ALL_LAYOUTS)
 def test_guard_pixels_hold_the_continued_direction(sky, name, guard):
     fill = guard == "fill"
-    out = envconv.convert(sky, name, size=N, samples=1, guard=guard, alpha=True)
+    out = envconv.convert(sky, name, size=N, samples=1, guard=guard, alpha=True, filter="bilinear")
     dirs, region = guarded_geometry(name, N, 0 if fill else guard, fill)
     assert out.pixels.shape[:2] == region.shape
     truth = smooth_radiance(np.where(region[..., None] > 0, dirs, [0.0, 0.0, 1.0]))

@@ -32,9 +32,12 @@ samples="auto"
     of output to source pixel pitch on the horizon, so that every level is the exact block
     average of level 0 (see :mod:`envconv.resample.mips`).
 filter
-    ``bilinear`` (default), ``bicubic`` (Catmull-Rom, clamped to the range of the four nearest
+    ``area`` (default: each pixel the exact solid-angle mean of the box-reconstructed source
+    over its footprint, docs/geometry.md "Pixel values"; the sample rules above are the point
+    kernel's), ``bilinear``, ``bicubic`` (Catmull-Rom, clamped to the range of the four nearest
     texels so it can never ring past them: no new negatives next to an HDR highlight) or
-    ``nearest``.
+    ``nearest``. With a guard ring the area filter makes the cells' pixels and a bilinear tap of
+    that map the ring's (:func:`_area_with_guard`).
 """
 
 from __future__ import annotations
@@ -117,8 +120,8 @@ def convert(
         ``area``: each pixel the exact solid-angle mean of the box-reconstructed source over
         its footprint (every texel's energy kept); the others read the source at sub-sample
         points through that filter. Default: ``area``, or ``bilinear`` where the area filter
-        cannot make the result yet (a guard ring, or a partial view as input:
-        :func:`envconv.resample.options.choose_filter`).
+        cannot make the result yet (a partial view as input, or a guard ring around a partial
+        view: :func:`envconv.resample.options.choose_filter`).
     rotate : "YAW,PITCH,ROLL" or 3 numbers, optional
         Rotation of the environment in degrees (see :mod:`envconv.layouts.rotation`).
     guard : int or "fill"
@@ -169,7 +172,7 @@ def convert(
     (128, 96, 3)
     """
     to, size = output_layout(envmap, to, size, fov, yaw, pitch, roll, out_convention, mips, guard)
-    filter = choose_filter(envmap, guard, filter)
+    filter = choose_filter(envmap, guard, filter, to)
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
@@ -286,14 +289,21 @@ def _resample(
     weights = np.zeros((height, width), np.float32) if mips else None
     if not _level0_unused(envmap, to, size, guard_px, irradiance, needs_coverage, mips):
         # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
-        rip, rip_levels, rip_row_count = source_rips(envmap, src, 1 if same_grid else n_samples,
-                                                     filter, to, size)  # fmt: skip
-        kernels.resample_rows(
-            src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
-            FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
-            zeroed=True, coverage_channel=direct_alpha,
-        )  # fmt: skip
-        del rip
+        if filter == "area" and (guard_px or fill):
+            # A chain's ring takes the one sample count a point-sampled chain would.
+            ring_samples = auto_samples(envmap, to, size) if mips else 1
+            _area_with_guard(src, sgeo, to, size, guard_px, fill, n_samples, ring_samples, rot,
+                             out, None if direct_alpha else coverage, weights, direct_alpha)  # fmt: skip
+        else:
+            rip, rip_levels, rip_row_count = source_rips(
+                envmap, src, 1 if same_grid else n_samples, filter, to, size
+            )
+            kernels.resample_rows(
+                src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
+                FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
+                zeroed=True, coverage_channel=direct_alpha,
+            )  # fmt: skip
+            del rip
     if same_grid:
         # Same grid: every sample sits on a source pixel centre, where every filter returns that
         # pixel. Copy it exactly rather than through tap weights that round to 1e-16.
@@ -337,6 +347,54 @@ def _resample(
     )
 
 
+def _area_with_guard(src, sgeo, to, size, guard, fill, samples, ring_samples, rot, out,
+                     coverage, weights, coverage_channel):  # fmt: skip
+    """Level 0 of the area filter with a guard ring (``guard`` pixels) or ``fill``, into ``out``
+    (as :func:`kernels.resample_rows` fills it).
+
+    Every pixel with valid directions is the area filter's exact mean, made without the ring;
+    a guard (or filled) pixel holds what a GPU reads across the cell's edge: a bilinear tap of
+    that area-filtered map at the continued direction of the pixel's centre (``ring_samples``
+    1; a mip chain's ring takes the sub-samples a point-sampled chain would, its block means
+    needing one weight rule). So the ring costs the map no energy and adds none of its own.
+    """
+    inner_geometry = kernel_geometry(to, size, 0)
+    width, height = to.image_size(size, 0)
+    inner = np.zeros((height, width, src.shape[2]), np.float32)
+    inner_coverage = np.zeros((height, width), np.float32)
+    inner_weights = np.zeros((height, width), np.float32)
+    no_rips = np.zeros((1, 1, src.shape[2]), np.float32)
+    kernels.resample_rows(
+        src, no_rips, 0, 0, sgeo, inner_geometry, 1.0, 1.0, samples or 1, kernels.AREA_FILTER,
+        rot, False, inner, inner_coverage, inner_weights, zeroed=True,
+    )  # fmt: skip
+    kernels.resample_rows(
+        inner, no_rips, 0, 0, inner_geometry, kernel_geometry(to, size, guard), 1.0, 1.0,
+        ring_samples, kernels.FILTER_BILINEAR, np.eye(3), fill, out, coverage, weights, zeroed=True,
+        coverage_channel=coverage_channel,
+    )  # fmt: skip
+    if weights is not None:
+        # The point kernel's weight is S x S times a density per unit (a, b) area, the area
+        # filter's a solid angle: the ring's are made solid angles too, for the block means.
+        weights *= 4.0 / (to.content_width(size) * size * ring_samples**2)
+    channels = src.shape[2]
+    inner_w, inner_h = to.cell_size(size, 0)
+    cell_w, cell_h = to.cell_size(size, guard)
+    for cell in to.cells:
+        here = (slice(cell.row * inner_h, (cell.row + 1) * inner_h),
+                slice(cell.col * inner_w, (cell.col + 1) * inner_w))  # fmt: skip
+        there = (slice(cell.row * cell_h + guard, cell.row * cell_h + guard + inner_h),
+                 slice(cell.col * cell_w + guard, cell.col * cell_w + guard + inner_w))  # fmt: skip
+        valid = inner_coverage[here] > 0
+        out[there][..., :channels][valid] = inner[here][valid]
+        if coverage_channel:
+            out[there][..., channels][valid] = inner_coverage[here][valid]
+        elif coverage is not None:
+            coverage[there][valid] = inner_coverage[here][valid]
+        if weights is not None:
+            weights[there][valid] = inner_weights[here][valid]
+
+
 def _level0_unused(
     envmap: EnvMap, to: Layout, size: int, guard: int, irradiance: bool, needs_coverage: bool, mips
 ) -> bool:
@@ -377,6 +435,10 @@ def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False
     # The area filter's per-thread tables, edge memos and band buffers (measured: up to about
     # 8 MB a thread for a 2048 x 1024 source).
     scratch = AREA_SCRATCH * kernels.get_threads() if filter in (None, "area") else 0
+    if filter in (None, "area") and (guard == "fill" or guard_px) and not layout.partial:
+        # _area_with_guard's map without the ring: its pixels, coverage and weights.
+        width, height = layout.image_size(int(size), 0)
+        scratch += width * height * (envmap.pixels.shape[2] + 2) * 4
     return memory.estimate_convert(envmap, layout, int(size), guard_px, chain, alpha, rips,
                                    scratch)  # fmt: skip
 

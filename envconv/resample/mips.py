@@ -164,6 +164,10 @@ def _fallback_level(source, to, size, guard, fill, samples, filt, rot, sizes, le
     scale = (w0 / wk, h0 / hk)
     dgeo_all = kernel_geometry(to, size, guard)
     cover = levels[0][1] is not None
+    if filt == kernels.AREA_FILTER and (guard or fill):
+        # A level whose cells are no longer whole texels has no ring to keep apart from its
+        # cells' pixels: it is made as the point kernel makes it, from a finer level.
+        filt = kernels.FILTER_BILINEAR
     if filt == kernels.AREA_FILTER:
         # The area filter integrates each texel of level k exactly, from the source itself.
         log.debug("mip level %d: %dx%d from the source, exact area", k, wk, hk)

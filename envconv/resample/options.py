@@ -133,18 +133,20 @@ def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float
     return int(min(max(round(pitch_out / pitch_in), 1), MAX_SAMPLES))
 
 
-def choose_filter(source: EnvMap, guard, requested: str | None) -> str:
+def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | None = None) -> str:
     """The filter a conversion uses: ``requested``, or without one the area filter, except
-    where it cannot make the result yet (a guard ring, a partial view as input), which takes
-    the bilinear point kernel. UsageError when ``area`` is asked for there, or the name is
-    unknown."""
+    where it cannot make the result yet (a partial view as input or as a guarded output), which
+    takes the bilinear point kernel. UsageError when ``area`` is asked for there, or the name
+    is unknown. A guard ring around a whole-sphere layout takes the area filter: its pixels are
+    the area filter's, its ring what a GPU reads across the edge of that map
+    (:func:`envconv.resample.convert.convert`)."""
     if requested is not None and requested not in FILTERS:
         raise UsageError(f"unknown filter {requested!r}; choose one of {', '.join(FILTERS)}")
     reason = None
-    if guard not in (0, None):
-        reason = "a guard ring"
-    elif source.layout.partial:
+    if source.layout.partial:
         reason = "a partial view as input"
+    elif guard not in (0, None) and to is not None and to.partial:
+        reason = "a guard ring around a partial view"
     if requested is None:
         return "bilinear" if reason else "area"
     if requested == "area" and reason:

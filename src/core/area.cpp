@@ -86,9 +86,32 @@ void slow_block(const AreaJob& job, SlowPath& sp, PixelSums& sums, int64_t i0, i
     }
 }
 
+// The density models (SourceModel::texel) of a box of texels of one source cell, each
+// computed on its first use: a tile's direct pixels share their texels (about four pieces
+// each at 1:1), and a texel's model costs four maps and four densities.
+struct DensityCache {
+    int64_t cell = -1, c0 = 0, r0 = 0, w = 0, h = 0;
+    std::vector<TexelDensity> t;  // m NaN: not computed yet
+    void reset(int64_t cell_, int64_t c0_, int64_t r0_, int64_t c1, int64_t r1) {
+        cell = cell_;
+        c0 = c0_;
+        r0 = r0_;
+        w = c1 - c0 + 1;
+        h = r1 - r0 + 1;
+        t.assign(size_t(w * h), TexelDensity{std::nan(""), 0.0, 0.0});
+    }
+    TexelDensity get(const SourceModel& model, int64_t ix, int64_t iy) {
+        const uint64_t dx = uint64_t(ix - c0), dy = uint64_t(iy - r0);
+        if (dx >= uint64_t(w) || dy >= uint64_t(h)) return model.texel(cell, ix, iy);
+        TexelDensity& e = t[size_t(dy * uint64_t(w) + dx)];
+        if (std::isnan(e.m)) e = model.texel(cell, ix, iy);
+        return e;
+    }
+};
+
 // Sink of green.h for the direct path: texels read as they are (a lat-long's columns modulo its
 // width), weighted by a lat-long or tennisball row's exact solid angle (kRows) or the density
-// model; NCH channels (0: sums.nch).
+// model (through the tile's cache); NCH channels (0: sums.nch).
 template <bool kRows, int NCH>
 struct DirectSink {
     static constexpr bool kMomentX = !kRows;
@@ -96,6 +119,7 @@ struct DirectSink {
     int64_t cell, row0, period;
     double sign;
     PixelSums& sums;
+    DensityCache& cache;
     double m = 0.0, g = 0.0;
     // True when rows r0 ... r1 all hold a flat density model (no y moments needed).
     bool flat(int64_t r0, int64_t r1) const {
@@ -115,7 +139,10 @@ struct DirectSink {
         if (kRows) {
             w = m * area + g * dy;
         } else {
-            w = sign * model.weight(cell, ix, iy, area, dx, dy);
+            TexelDensity t = cache.get(model, ix, iy);
+            // An octahedral texel that a kink crosses holds a model per part (kKinked).
+            w = sign * (t.gx == kKinked ? model.weight(cell, ix, iy, area, dx, dy)
+                                        : t.m * area + t.gx * dx + t.gy * dy);
         }
         if (period) {
             while (ix < 0) ix += period;
@@ -130,10 +157,11 @@ struct DirectSink {
 
 template <bool kRows, int NCH>
 void direct_pixel(const SourceModel& model, int64_t cell, int64_t row0, int64_t period,
-                  const double* xs, const double* ys, int n, PixelSums& sums, GreenScratch& green) {
+                  const double* xs, const double* ys, int n, PixelSums& sums, GreenScratch& green,
+                  DensityCache& cache) {
     double area, mx, my;
     polygon_moments(xs, ys, n, area, mx, my);
-    DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums};
+    DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums, cache};
     if (kRows || model.g.family != kOctahedral) {
         integrate_any(xs, ys, n, sink, green);
         return;
@@ -145,7 +173,7 @@ void direct_pixel(const SourceModel& model, int64_t cell, int64_t row0, int64_t 
 }
 
 using DirectPixel = void (*)(const SourceModel&, int64_t, int64_t, int64_t, const double*,
-                             const double*, int, PixelSums&, GreenScratch&);
+                             const double*, int, PixelSums&, GreenScratch&, DensityCache&);
 
 DirectPixel direct_pixel_for(bool rows, int64_t nch) {
     if (rows) {
@@ -154,9 +182,25 @@ DirectPixel direct_pixel_for(bool rows, int64_t nch) {
     return nch == 3 ? direct_pixel<false, 3> : nch == 4 ? direct_pixel<false, 4> : direct_pixel<false, 0>;
 }
 
+// True when the box [xmin, xmax] x [ymin, ymax] of tennisball band `cell` (its continued
+// coordinates) holds only directions the band owns (layouts.h): the two bands overlap, and
+// past |phi| = 90 deg a band owns only where |sin phi| cos theta >= sqrt(2)/2, least at the
+// box's largest |phi| and |theta|. The general path reads the owner's texels; so must the
+// direct path, or the overlap's texels would be read by both bands' pixels, or by neither.
+bool tennisball_owned(const Geometry& g, int64_t cell, double xmin, double ymin, double xmax,
+                      double ymax) {
+    double a0, b0, a1, b1;
+    cell_local(g, cell, xmin, ymin, a0, b0);
+    cell_local(g, cell, xmax, ymax, a1, b1);
+    const double phi = std::max(std::fabs(a0), std::fabs(a1)) * tennisball::kPhiHalf;
+    const double theta = std::max(std::fabs(b0), std::fabs(b1)) * tennisball::kThetaHalf;
+    return phi < 0.5 * kPi || std::sin(phi) * std::cos(theta) > tennisball::kHalfSqrt2 + 1e-9;
+}
+
 // True when the quad (xs, ys) of source cell `cell` can be integrated as it is: every texel it
-// touches is one the cell holds (a lat-long's columns wrap), no singular point is inside or on
-// it, and it does not wind around a lat-long pole.
+// touches is one the cell holds (a lat-long's columns wrap, a tennisball band owns its
+// directions), no singular point is inside or on it, and it does not wind around a lat-long
+// pole.
 bool direct_quad(const Geometry& g, int64_t cell, const double* xs, const double* ys) {
     double xmin = std::min({xs[0], xs[1], xs[2], xs[3]}), xmax = std::max({xs[0], xs[1], xs[2], xs[3]});
     double ymin = std::min({ys[0], ys[1], ys[2], ys[3]}), ymax = std::max({ys[0], ys[1], ys[2], ys[3]});
@@ -173,6 +217,7 @@ bool direct_quad(const Geometry& g, int64_t cell, const double* xs, const double
         return true;
     }
     if (!(xmin > x0 + margin && xmax < x0 + w - margin)) return false;
+    if (g.family == kTennisball) return tennisball_owned(g, cell, xmin, ymin, xmax, ymax);
     if (!g.disk()) return true;
     double r = 0.5 * h, cx = x0 + r, cy = y0 + r;
     double turn = 0.0;
@@ -192,6 +237,7 @@ struct TileScratch {
     SidePath sides[4];                // how the tile took a general-path pixel's sides
 
     PrefixTable table;
+    DensityCache density;  // the tile's texel densities (sources without exact rows)
     EdgeMemo edges;
 };
 
@@ -361,7 +407,8 @@ bool whole_tile_direct(const Geometry& g, const CornerGrid& grid) {
     double w = double(g.nx), h = double(g.n);
     if (!(ymin > y0 + margin && ymax < y0 + h - margin)) return false;
     if (g.family == kLatlong && g.guard == 0) return xmax - xmin < 0.5 * w;
-    return xmin > x0 + margin && xmax < x0 + w - margin;
+    return xmin > x0 + margin && xmax < x0 + w - margin &&
+           tennisball_owned(g, cell, xmin, ymin, xmax, ymax);
 }
 
 // How the tile took the sides of pixel (i, j) (for the general path, in the order (i, j) ->
@@ -464,9 +511,10 @@ double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx,
     const int64_t step = di ? 1 : g.w + 1, across = di ? g.w + 1 : 1;
     const int64_t k0 = int64_t(g.at(i, j)), k1 = k0 + step;
     const int64_t lo = line > 0 ? k0 - across : k0, hi = line < m ? k0 + across : k0;
-    const double lines = double(hi - lo) / double(across);
+    // Over the number of spacings between lo and hi (1 or 2): a product, exactly the quotient.
+    const double per_line = line > 0 && line < m ? 0.5 : 1.0;
     double tx = x[k1] - x[k0], ty = y[k1] - y[k0];
-    double sx = (x[hi] - x[lo]) / lines, sy = (y[hi] - y[lo]) / lines;
+    double sx = (x[hi] - x[lo]) * per_line, sy = (y[hi] - y[lo]) * per_line;
     double spacing = std::fabs(tx * sy - ty * sx);
     dx = dy = 0.0;
     if (!(spacing > 0.0)) return -1.0;
@@ -523,9 +571,13 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
             if (bend >= 0.0 && bend <= 0.5 * kChordTol) return;
             if (bend >= 0.0 && bend <= kParabolaBend * kChordTol) {
                 // P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second difference.
-                for (double t : {0.25, 0.5, 0.75}) {
-                    e.px.push_back(g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * dx);
-                    e.py.push_back(g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * dy);
+                const size_t at = e.px.size();
+                e.px.resize(at + 3);
+                e.py.resize(at + 3);
+                for (int q = 0; q < 3; ++q) {
+                    const double t = 0.25 * double(q + 1);
+                    e.px[at + size_t(q)] = g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * dx;
+                    e.py[at + size_t(q)] = g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * dy;
                 }
                 e.refine[index] = 2;
                 return;
@@ -602,6 +654,37 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
     }
 }
 
+// Set the tile's density cache to the texel box of its direct pixels (their corners and, in a
+// curved tile, their polylines), or to no box where there are none or it is too large.
+void density_box(const CornerGrid& g, TileScratch& ts) {
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
+    for (int j = 0; j < g.h; ++j) {
+        for (int i = 0; i < g.w; ++i) {
+            if (!ts.direct[size_t(j * g.w + i)]) continue;
+            for (int q = 0; q < 4; ++q) {
+                size_t k = g.at(i + (q & 1), j + (q >> 1));
+                xmin = std::min(xmin, g.x[k]);
+                xmax = std::max(xmax, g.x[k]);
+                ymin = std::min(ymin, g.y[k]);
+                ymax = std::max(ymax, g.y[k]);
+            }
+        }
+    }
+    for (size_t k = 0; ts.curved && k < ts.edges.px.size(); ++k) {
+        xmin = std::min(xmin, ts.edges.px[k]);
+        xmax = std::max(xmax, ts.edges.px[k]);
+        ymin = std::min(ymin, ts.edges.py[k]);
+        ymax = std::max(ymax, ts.edges.py[k]);
+    }
+    if (!(xmin <= xmax && ymin <= ymax) ||
+        (xmax - xmin + 2.0) * (ymax - ymin + 2.0) > double(kMaxTableTexels)) {
+        ts.density.reset(g.ref_cell, 0, 0, -1, -1);
+        return;
+    }
+    ts.density.reset(g.ref_cell, floor_texel(xmin), floor_texel(ymin), floor_texel(xmax),
+                     floor_texel(ymax));
+}
+
 // The pixels of one tile inside output cell `cell` (grid: its corners): direct where the
 // corner grid allows (through edge integrals for lat-long and tennisball sources, else pixel
 // by pixel), the general path with the grid's corners elsewhere.
@@ -651,6 +734,7 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     ts.edges.reset(grid.w, grid.h, sums.nch);
     if (ts.curved) refine_tile_edges(job, grid, ts, cell);
     if (usable && (s.family == kOctahedral || s.family == kEqualArea)) fold_guard(job, grid, ts, cell);
+    if (!rows) density_box(grid, ts);
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
     while (band_j0 < grid.h) {
@@ -681,7 +765,7 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                         sums.weight = 0.0;
                         pixel_polygon(grid, ts, i, j, sp.xs, sp.ys);
                         direct(job.model, grid.ref_cell, row0, period, sp.xs.data(), sp.ys.data(),
-                               int(sp.xs.size()), sums, sp.green);
+                               int(sp.xs.size()), sums, sp.green, ts.density);
                     }
                 } else {
                     std::fill(sums.acc, sums.acc + sums.nch, 0.0);
@@ -730,18 +814,26 @@ bool cone_in_box(const AreaJob& job, int64_t cell, double x0, double y0, double 
     return false;
 }
 
-// Output rows [j0, j1): tiles of up to kAreaTile x kAreaTile pixels, each inside one output
-// cell through tile_pixels; a tile across cell edges pixel by pixel.
-void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
-               CornerGrid& grid, TileScratch& ts) {
+// The end (exclusive) of the run of output pixels from pixel i (scale level-0 pixels each)
+// that lie in the same row or column of cells (cell level-0 pixels each), at least i + 1.
+int64_t cell_run_end(int64_t i, double scale, int64_t cell) {
+    int64_t c = floor_index(double(i) * scale / double(cell));
+    return std::max(i + 1, int64_t(std::floor(double(c + 1) * double(cell) / scale)));
+}
+
+// Output rows [j0, j1), all in one row of cells: tiles of up to kAreaTile x kAreaTile pixels,
+// ending where a column of cells does, each inside one output cell through tile_pixels; a tile
+// across cell edges (a pixel that straddles one) pixel by pixel.
+void area_tiles(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
+                CornerGrid& grid, TileScratch& ts) {
     const Conversion& cv = job.cv;
     const Geometry& d = cv.dst;
     const ResampleOutput& out = job.out;
     // The right column of the last tile mapped, for the next tile of the same cell.
     std::vector<SourcePoint>& shared = ts.column;
     int64_t shared_cell = -1, shared_i = -1;
-    for (int64_t i0 = 0; i0 < out.width; i0 += kAreaTile) {
-        int64_t i1 = std::min(i0 + kAreaTile, out.width);
+    for (int64_t i0 = 0, i1; i0 < out.width; i0 = i1) {
+        i1 = std::min({i0 + kAreaTile, out.width, cell_run_end(i0, cv.scale_x, d.cell_width())});
         double x0 = double(i0) * cv.scale_x, y0 = double(j0) * cv.scale_y;
         double x1 = double(i1) * cv.scale_x, y1 = double(j1) * cv.scale_y;
         if (!cv.fill && out.zeroed && tile_in_empty_cell(d, x0, y0, x1, y1)) continue;
@@ -763,6 +855,17 @@ void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSu
         shared_cell = cell;
         shared_i = i1;
         tile_pixels(job, sp, sums, grid, ts, cell, regular);
+    }
+}
+
+// Output rows [j0, j1): split where a row of cells ends (so that a band across a cell edge
+// still has direct tiles), each part through area_tiles.
+void area_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelSums& sums,
+               CornerGrid& grid, TileScratch& ts) {
+    const Conversion& cv = job.cv;
+    for (int64_t a = j0, b; a < j1; a = b) {
+        b = std::min(j1, cell_run_end(a, cv.scale_y, cv.dst.cell_height()));
+        area_tiles(job, a, b, sp, sums, grid, ts);
     }
 }
 

@@ -537,6 +537,25 @@ void split_in_four(SlowPath& sp, const Piece& p, int depth) {
     }
 }
 
+// True when the piece (straight edges only) covers at most kTinyPiece of an output pixel.
+bool tiny_piece(const SlowPath& sp, const Piece& p) {
+    double area = 0.0;
+    for (int k = 0; k < p.n; ++k) {
+        const PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
+        if (s.arc) return false;
+        area += s.x * e.y - e.x * s.y;
+    }
+    return 0.5 * std::fabs(area) <= kTinyPiece * sp.cv.scale_x * sp.cv.scale_y;
+}
+
+// A piece that did not resolve: split in four, or read at its centre at once where it is tiny
+// (its quarters would hold no more, and a sliver along a seam, which no cell's footprint
+// holds, would otherwise split down to kMaxPieceDepth: 4^8 leftovers).
+void split_or_leftover(SlowPath& sp, const Piece& p, int depth) {
+    if (tiny_piece(sp, p)) add_leftover(sp, p);
+    else split_in_four(sp, p, depth);
+}
+
 // Integrate one piece of an output pixel into the pixel's sums.
 void process_piece(SlowPath& sp, Piece& p, int depth) {
     if (p.n < 2) return;
@@ -557,7 +576,7 @@ void process_piece(SlowPath& sp, Piece& p, int depth) {
         else if (f.cell[k] != cell) several = true;
     }
     if (several) {
-        if (!split_at_seam(sp, p, f, depth)) split_in_four(sp, p, depth);
+        if (!split_at_seam(sp, p, f, depth)) split_or_leftover(sp, p, depth);
         return;
     }
     if (cell < 0) {
@@ -573,7 +592,7 @@ void process_piece(SlowPath& sp, Piece& p, int depth) {
     for (int s = 0; built && s < 2; ++s)
         if (closure[s]) built = close_around_singular(sp, cell, s);
     if (!built) {
-        split_in_four(sp, p, depth);
+        split_or_leftover(sp, p, depth);
         return;
     }
     add_footprint(sp, cell);

@@ -11,8 +11,8 @@
 // boundary becomes a run of its edge (the pole's row edge, the rim arc) between the limits of
 // the adjacent edges; one inside the piece closes the footprint around it. Anything else that
 // does not resolve (three cells at a cube corner, a seam that bulges between two vertices)
-// splits the piece in four, down to kMaxPieceDepth; the last leftover piece is read at its
-// centre with its own solid angle.
+// splits the piece in four, down to kMaxPieceDepth; the last leftover piece, or one too small
+// to matter (kTinyPiece), is read at its centre with its own solid angle.
 #pragma once
 
 #include <cmath>
@@ -35,6 +35,9 @@ constexpr double kChordTol = 5e-4;
 constexpr double kCornerTol = 1e-3;
 constexpr int kMaxRefine = 16;       // halvings of an edge
 constexpr int kMaxPieceDepth = 8;    // splits of a piece
+// A piece that does not resolve and covers at most this share of an output pixel is read at
+// its centre without splitting (it moves at most this share of the pixel's weight).
+constexpr double kTinyPiece = 1e-9;
 constexpr double kSnap = 1e-5;       // output pixels: a singular point this near the boundary is on it
 constexpr double kRimStep = 2e-3;    // rad: steps of a rim arc in a disk source
 constexpr double kConeAngle = 1e-6;  // rad: a vertex this near a cone point stands on it

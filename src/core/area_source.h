@@ -18,6 +18,7 @@
 #include <atomic>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 #include "taps.h"
@@ -32,6 +33,9 @@ struct SourcePoint {
 struct TexelDensity {
     double m, gx, gy;
 };
+
+// The slope gx of a texel whose density model is per part (SourceModel::weight).
+constexpr double kKinked = std::numeric_limits<double>::infinity();
 
 // Continued (a, b) of direction d on cube face `face` (GL, EXR or equi-angular family: the
 // face plane's coordinates, which eac then takes to its angles, continued past the face as
@@ -233,9 +237,10 @@ struct SourceModel {
 
     // 2 x 2 Gauss-Legendre points of the texel: their mean and the mean slope across them. A
     // texel of an octahedral square that a kink of its density crosses holds a model per part
-    // (weight): this one is only its mean.
+    // (weight): this one is its mean and gx = kKinked, which tells a caller to ask weight().
     TexelDensity generic(int64_t cell, int64_t ix, int64_t iy) const {
-        if (g.family == kOctahedral && octahedral_kink(cell, ix, iy)) return {weight(cell, ix, iy, 1.0, 0.0, 0.0), 0.0, 0.0};
+        if (g.family == kOctahedral && octahedral_kink(cell, ix, iy))
+            return {weight(cell, ix, iy, 1.0, 0.0, 0.0), kKinked, 0.0};
         const double off = 0.5 / std::sqrt(3.0);
         double v[2][2];
         for (int q = 0; q < 4; ++q) {
