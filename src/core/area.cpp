@@ -637,6 +637,15 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
     const double x0 = double((g.ref_cell % s.columns) * s.cell_width() + s.guard);
     const double y0 = double((g.ref_cell / s.columns) * s.cell_height() + s.guard);
     const double w = double(s.nx), h = double(s.n);
+    auto inside = [&](double x, double y) {
+        return x > x0 + margin && x < x0 + w - margin && y > y0 + margin && y < y0 + h - margin;
+    };
+    // Most tiles lie inside the square whole: every corner and polyline point at once.
+    bool all = true;
+    for (size_t k = 0; all && k < g.x.size(); ++k) all = inside(g.x[k], g.y[k]);
+    for (size_t k = 0; all && ts.curved && k < ts.edges.px.size(); ++k)
+        all = inside(ts.edges.px[k], ts.edges.py[k]);
+    if (all) return;
     std::vector<double> xs, ys;
     for (int j = 0; j < g.h; ++j) {
         for (int i = 0; i < g.w; ++i) {
@@ -644,8 +653,7 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
             if (!direct) continue;
             pixel_polygon(g, ts, i, j, xs, ys);
             for (size_t k = 0; k < xs.size(); ++k) {
-                if (!(xs[k] > x0 + margin && xs[k] < x0 + w - margin && ys[k] > y0 + margin &&
-                      ys[k] < y0 + h - margin)) {
+                if (!inside(xs[k], ys[k])) {
                     direct = 0;
                     break;
                 }
