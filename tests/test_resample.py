@@ -18,7 +18,6 @@ from conftest import rel_rms
 import envconv
 from envconv.layouts import LAYOUTS
 from envconv.layouts.geometry import dir_to_uv, pixel_directions, pixel_solid_angles
-from envconv.resample.options import AREA_POINT_ONLY
 
 NAMES = list(LAYOUTS)
 N_LATLONG = 64  # the analytic lat-long source is 128 × 64
@@ -33,8 +32,12 @@ CUBES = [name for name in NAMES if name.startswith("cube")]
 #: Error allowed as a share of a half-pixel shift's, where the area filter (the default) is held
 #: looser: a paraboloid input is magnified 2 x near its centre, where the area filter's box
 #: reconstruction makes texel blocks (0.032 rel. RMS against the point kernel's 0.013; a known
-#: gap: the linear reconstruction of branch h-linear brings it to 0.0045).
-ACCURACY = {"paraboloid": 0.65, "paraboloid-split": 0.65}
+#: gap: the linear reconstruction of branch h-linear brings it to 0.0045). So is a 64-px
+#: octahedral square read into a 128 x 64 lat-long (up to 1.45 x magnified, off its diagonals):
+#: 0.53 of a shift into the lat-long, 0.56 in the round trip, against the point kernel's 0.27
+#: and 0.34; a brute-force box average of the same square (12 x 12 sub-samples a pixel) is
+#: 0.53 too, and within 0.0012 rel. RMS of the area filter's (measured).
+ACCURACY = {"paraboloid": 0.65, "paraboloid-split": 0.65, "octahedral": 0.6}
 #: Layouts whose default view covers part of the sphere: as sources they leave holes, so their
 #: lat-longs are compared where they cover (alpha 1) and their energy over what they cover.
 PARTIAL = set(naive.PARTIAL)
@@ -256,8 +259,6 @@ def test_seams_layout_to_latlong(name):
 
     near, interior = near_and_interior("bilinear")
     assert near <= max(1.5 * interior, SEAM_FLOOR), (near, interior)
-    if name in AREA_POINT_ONLY:
-        return
     point_near = near
     near, interior = near_and_interior("area")
     # A paraboloid's rim texels stay boxes (their slopes would cross the rim): next to the

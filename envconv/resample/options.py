@@ -20,7 +20,7 @@ from ..layouts.geometry import horizon_pitch
 from ..limits import check_size as bounded_size
 from . import kernels
 
-__all__ = ["FILTERS", "AREA_POINT_ONLY", "choose_filter", "rim_to_mirror_ball", "RIM_SOURCES", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
+__all__ = ["FILTERS", "choose_filter", "rim_to_mirror_ball", "RIM_SOURCES", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
            "check_samples", "check_guard", "check_mips", "check_conventions", "check_roughness",
            "output_channels", "check_size", "check_output", "output_layout"]  # fmt: skip
 
@@ -133,21 +133,13 @@ def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float
     return int(min(max(round(pitch_out / pitch_in), 1), MAX_SAMPLES))
 
 
-#: Inputs the area filter does not integrate right yet, and why (docs/geometry.md, "Pixel
-#: values"): a folded square's centre lines lose or gain up to a third of their energy.
-AREA_POINT_ONLY = {
-    "octahedral": "an octahedral input (its folds)",
-    "equal-area": "an equal-area input (its folds)",
-}
-
-
 def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | None = None) -> str:
     """The filter a conversion uses: ``requested``, or without one the area filter, except
-    where it cannot make the result yet (a partial view as input or as a guarded output, a
-    folded square as input), which takes the bilinear point kernel. UsageError when ``area``
-    is asked for there, or the name is unknown. A guard ring around a whole-sphere layout
-    takes the area filter: its pixels are the area filter's, its ring what a GPU reads across
-    the edge of that map (:func:`envconv.resample.convert.convert`)."""
+    where it cannot make the result yet (a partial view as input or as a guarded output), which
+    takes the bilinear point kernel. UsageError when ``area`` is asked for there, or the name
+    is unknown. A guard ring around a whole-sphere layout takes the area filter: its pixels are
+    the area filter's, its ring what a GPU reads across the edge of that map
+    (:func:`envconv.resample.convert.convert`)."""
     if requested is not None and requested not in FILTERS:
         raise UsageError(f"unknown filter {requested!r}; choose one of {', '.join(FILTERS)}")
     reason = None
@@ -155,8 +147,6 @@ def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | Non
         reason = "a partial view as input"
     elif guard not in (0, None) and to is not None and to.partial:
         reason = "a guard ring around a partial view"
-    elif source.layout.name in AREA_POINT_ONLY:
-        reason = AREA_POINT_ONLY[source.layout.name]
     if requested is None:
         return "bilinear" if reason else "area"
     if requested == "area" and reason:

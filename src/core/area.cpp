@@ -140,7 +140,9 @@ struct DirectSink {
             w = m * area + g * dy;
         } else {
             TexelDensity t = cache.get(model, ix, iy);
-            w = sign * (t.m * area + t.gx * dx + t.gy * dy);
+            // An octahedral texel that a kink crosses holds a model per part (kKinked).
+            w = sign * (t.gx == kKinked ? model.weight(cell, ix, iy, area, dx, dy)
+                                        : t.m * area + t.gx * dx + t.gy * dy);
         }
         if (period) {
             while (ix < 0) ix += period;
@@ -160,7 +162,14 @@ void direct_pixel(const SourceModel& model, int64_t cell, int64_t row0, int64_t 
     double area, mx, my;
     polygon_moments(xs, ys, n, area, mx, my);
     DirectSink<kRows, NCH> sink{model, cell, row0, period, area > 0.0 ? 1.0 : -1.0, sums, cache};
-    integrate_any(xs, ys, n, sink, green);
+    if (kRows || model.g.family != kOctahedral) {
+        integrate_any(xs, ys, n, sink, green);
+        return;
+    }
+    thread_local std::vector<std::vector<double>> scratch;
+    split_at_kinks(model.g, cell, xs, ys, n, scratch, [&](const double* px, const double* py, int m) {
+        integrate_any(px, py, m, sink, green);
+    });
 }
 
 using DirectPixel = void (*)(const SourceModel&, int64_t, int64_t, int64_t, const double*,
@@ -617,6 +626,42 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
     }
 }
 
+// A folded source's pixels stay direct only where their whole footprint lies inside the
+// square: every point of their outline (corners and refinement points) more than a margin
+// inside it (past an edge the texels fold, which the direct path does not read). Tiles that
+// hold a cone point take the general path whole (cone_in_box).
+void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t cell) {
+    const Conversion& cv = job.cv;
+    const Geometry& s = cv.src;
+    const double margin = 1e-6;
+    const double x0 = double((g.ref_cell % s.columns) * s.cell_width() + s.guard);
+    const double y0 = double((g.ref_cell / s.columns) * s.cell_height() + s.guard);
+    const double w = double(s.nx), h = double(s.n);
+    auto inside = [&](double x, double y) {
+        return x > x0 + margin && x < x0 + w - margin && y > y0 + margin && y < y0 + h - margin;
+    };
+    // Most tiles lie inside the square whole: every corner and polyline point at once.
+    bool all = true;
+    for (size_t k = 0; all && k < g.x.size(); ++k) all = inside(g.x[k], g.y[k]);
+    for (size_t k = 0; all && ts.curved && k < ts.edges.px.size(); ++k)
+        all = inside(ts.edges.px[k], ts.edges.py[k]);
+    if (all) return;
+    std::vector<double> xs, ys;
+    for (int j = 0; j < g.h; ++j) {
+        for (int i = 0; i < g.w; ++i) {
+            char& direct = ts.direct[size_t(j * g.w + i)];
+            if (!direct) continue;
+            pixel_polygon(g, ts, i, j, xs, ys);
+            for (size_t k = 0; k < xs.size(); ++k) {
+                if (!inside(xs[k], ys[k])) {
+                    direct = 0;
+                    break;
+                }
+            }
+        }
+    }
+}
+
 // Set the tile's density cache to the texel box of its direct pixels (their corners and, in a
 // curved tile, their polylines), or to no box where there are none or it is too large.
 void density_box(const CornerGrid& g, TileScratch& ts) {
@@ -667,6 +712,16 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     const int64_t st = grid.w + 1;
     const bool all_direct = straight && whole_tile_direct(s, grid);
     if (all_direct) std::fill(ts.direct.begin(), ts.direct.end(), 1);
+    // A disk source's -Z (its whole rim) in or on a pixel: the side through it leaves the
+    // rim at one point and comes back at the opposite one, and its image is that half of the
+    // rim, not the chord the grid would take (a sun on the rim texels of a 32-px mirror ball
+    // lost 6 % into a 50 x 25 lat-long): the general path runs along the rim.
+    double rim_x = 0.0, rim_y = 0.0;
+    const bool rim = usable && !all_direct && job.sing.kind == 2 &&
+                     continued_point(cv.dst, cell, job.sing.out[0],
+                                     (double(grid.i0) + 0.5 * grid.w) * cv.scale_x,
+                                     (double(grid.j0) + 0.5 * grid.h) * cv.scale_y, rim_x, rim_y);
+    const double slack = 1e-3 * std::max(cv.scale_x, cv.scale_y);
     for (int j = 0; j < grid.h && usable && !all_direct; ++j) {
         const double* x = grid.x.data() + j * st;
         const double* y = grid.y.data() + j * st;
@@ -678,12 +733,15 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
             // the general path finds the kinks.
             const double px0 = double(grid.i0 + i) * cv.scale_x, py0 = double(grid.j0 + j) * cv.scale_y;
             direct_row[i] = direct_quad(s, grid.ref_cell, xs, ys) &&
-                            !box_on_output_fold(cv, cell, px0, py0, px0 + cv.scale_x, py0 + cv.scale_y);
+                            !box_on_output_fold(cv, cell, px0, py0, px0 + cv.scale_x, py0 + cv.scale_y) &&
+                            !(rim && rim_x >= px0 - slack && rim_x <= px0 + cv.scale_x + slack &&
+                              rim_y >= py0 - slack && rim_y <= py0 + cv.scale_y + slack);
         }
     }
     ts.curved = usable && !straight;
     ts.edges.reset(grid.w, grid.h, sums.nch);
     if (ts.curved) refine_tile_edges(job, grid, ts, cell);
+    if (usable && (s.family == kOctahedral || s.family == kEqualArea)) fold_guard(job, grid, ts, cell);
     if (!rows) density_box(grid, ts);
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
@@ -748,6 +806,22 @@ bool inside_disk(const Geometry& d, int64_t cell, double x0, double y0, double x
     return fx * fx + fy * fy <= unit * unit;
 }
 
+// True when a cone point of a folded source (area_map.h) lands inside the output box
+// [x0, x1] x [y0, y1] of `cell` (more than a thousandth of a pixel from its edges). A tile
+// with one on its outline does not wind around it; should its corners be placed in two copies
+// about it, the grid's far-corner check fails and the tile goes pixel by pixel anyway.
+bool cone_in_box(const AreaJob& job, int64_t cell, double x0, double y0, double x1, double y1) {
+    const Conversion& cv = job.cv;
+    const double slack = 1e-3 * std::max(cv.scale_x, cv.scale_y);
+    for (int c = 0; c < job.sing.cones; ++c) {
+        double x, y;
+        if (!continued_point(cv.dst, cell, job.sing.cone_out[c], 0.5 * (x0 + x1), 0.5 * (y0 + y1), x, y))
+            continue;
+        if (x > x0 + slack && x < x1 - slack && y > y0 + slack && y < y1 - slack) return true;
+    }
+    return false;
+}
+
 // The end (exclusive) of the run of output pixels from pixel i (scale level-0 pixels each)
 // that lie in the same row or column of cells (cell level-0 pixels each), at least i + 1.
 int64_t cell_run_end(int64_t i, double scale, int64_t cell) {
@@ -774,6 +848,10 @@ void area_tiles(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, PixelS
         bool direct = direct_allowed.load(std::memory_order_relaxed);
         int64_t cell = direct ? rect_cell(d, x0, y0, x1, y1) : -1;
         bool regular = cell >= 0 && d.cell_face[cell] >= 0 && (!d.disk() || inside_disk(d, cell, x0, y0, x1, y1));
+        // A tile around a folded source's cone point has no one chart: going around the
+        // point flips the source's copy (four of them can add up to none, so the grid's own
+        // check may pass). Every pixel of it takes the general path.
+        regular = regular && !cone_in_box(job, cell, x0, y0, x1, y1);
         if (!regular) {
             slow_block(job, sp, sums, i0, j0, i1, j1);
             continue;
@@ -817,18 +895,20 @@ void sub_pixel_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, Pi
     fine_sp.sums = &sums;
     AreaJob fine_job{fine, job.model, job.sing, sub, 1};
     area_rows(fine_job, j0 * n, j1 * n, fine_sp, sums, grid, ts);
+    std::vector<double> acc(static_cast<size_t>(nch));  // any number of channels (a fixed 64 overran)
     for (int64_t j = j0; j < j1; ++j) {
         for (int64_t i = 0; i < job.out.width; ++i) {
-            double w = 0.0, acc[64] = {};
+            double w = 0.0;
+            std::fill(acc.begin(), acc.end(), 0.0);
             for (int64_t b = 0; b < n; ++b) {
                 for (int64_t a = 0; a < n; ++a) {
                     int64_t k = ((j - j0) * n + b) * width + i * n + a;
                     double wk = weights[size_t(k)];
                     w += wk;
-                    for (int64_t c = 0; c < nch && c < 64; ++c) acc[c] += wk * double(buffer[size_t(k * nch + c)]);
+                    for (int64_t c = 0; c < nch; ++c) acc[size_t(c)] += wk * double(buffer[size_t(k * nch + c)]);
                 }
             }
-            store_sums(job.out, i, j, w, acc, pixel_coverage(job.cv, job.out, i, j));
+            store_sums(job.out, i, j, w, acc.data(), pixel_coverage(job.cv, job.out, i, j));
         }
     }
 }

@@ -6,6 +6,14 @@
 // pole it runs along the pole's row edge, near -Z along the rim. The area filter finds where
 // each singular direction lands in an output cell and closes the footprints around it
 // (area_slow.h).
+//
+// Cone points are the source directions where a folded square (octahedral, equal-area) folds
+// an edge onto itself: the midpoints (+-1, 0), (0, +-1) of its edges, where (1, b) and (1, -b)
+// are one direction. The square's neighbourhood of such a point is a half disk, and the fold
+// continues it by a half turn about the point, so a full turn around the direction is half a
+// turn around the point in the square (or its continuation): a footprint that holds one does
+// not close in any continued coordinates. The general path splits such a piece through the
+// cone point (area_slow.h) and gives the point, on the pieces' boundary, its exact image.
 #pragma once
 
 #include <cmath>
@@ -21,6 +29,9 @@ struct Singular {
     int kind = 0;  // 1: lat-long poles (+Y, -Y); 2: a disk's -Z (sphere, angular)
     Vec3 src[2];   // in the source frame
     Vec3 out[2];   // in the output frame: rot^T src
+    int cones = 0;        // a folded square's cone points: +X, -X, +Z, -Z (its edge midpoints)
+    Vec3 cone_src[4];     // in the source frame
+    Vec3 cone_out[4];     // in the output frame
 };
 
 // True when a disk family's rim circle maps to one direction (the view axis's opposite): a
@@ -50,6 +61,15 @@ inline Singular source_singular(const Conversion& cv) {
                                              : Vec3{0.0, 0.0, -1.0};
     }
     for (int k = 0; k < s.count; ++k) s.out[k] = back(s.src[k]);
+    if (cv.src.family == kOctahedral || cv.src.family == kEqualArea) {
+        // face_to_dir of (1, 0), (-1, 0), (0, -1), (0, 1): the same in both squares.
+        const Vec3 cones[4] = {{1.0, 0.0, 0.0}, {-1.0, 0.0, 0.0}, {0.0, 0.0, 1.0}, {0.0, 0.0, -1.0}};
+        s.cones = 4;
+        for (int k = 0; k < 4; ++k) {
+            s.cone_src[k] = cones[k];
+            s.cone_out[k] = back(cones[k]);
+        }
+    }
     return s;
 }
 

@@ -28,6 +28,7 @@ struct PieceVertex {
     int side;       // the pixel side (0 ... 3) the edge from this vertex runs along, or -1
     bool boundary;  // the vertex lies on a source seam: it belongs to either side's cell
     int snapped;    // a source singular point (area_map.h) moved onto this vertex, or -1
+    int cone;       // the folded source's cone point (area_map.h) this vertex stands on, or -1
     SourcePoint src;
 };
 
@@ -40,7 +41,7 @@ struct Piece {
 };
 
 inline PieceVertex plain_vertex(double x, double y) {
-    return {x, y, false, false, false, false, false, -1, false, -1, {0.0, 0.0, -1}};
+    return {x, y, false, false, false, false, false, -1, false, -1, -1, {0.0, 0.0, -1}};
 }
 
 // The disk of a disk cell in level-0 pixels: centre and the radius of unit (a, b) radius.
@@ -184,6 +185,7 @@ inline void clip_piece(const Piece& in, double nx, double ny, double c, bool kee
         for (int m = 0; m < count && out.n < kPieceVertices; ++m) {
             PieceVertex v = s;
             v.mapped = false;
+            v.cone = -1;
             edge_point(in, k, ts[m], v.x, v.y);
             inside = !inside;  // every crossing changes sides
             if (!inside) {  // leaving: along the cut

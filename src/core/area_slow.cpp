@@ -7,6 +7,8 @@
 namespace envconv {
 namespace {
 
+void process_piece(SlowPath& sp, Piece& p, int depth);
+
 // Centroid of a piece's vertices.
 void piece_centre(const Piece& p, double& x, double& y) {
     x = y = 0.0;
@@ -89,11 +91,70 @@ void place_singular(const SlowPath& sp, Piece& p, bool closure[2]) {
             v.mapped = false;
             v.snapped = s;
             v.boundary = false;
+            v.cone = -1;
             for (int k = p.n; k > best + 1; --k) p.v[k] = p.v[k - 1];
             p.v[best + 1] = v;
             ++p.n;
         }
     }
+}
+
+// Put each cone point of a folded source (area_map.h) that lands in the piece on the piece's
+// boundary, where its image is exact: onto the vertex (within kSnap) or as a new vertex of the
+// edge it lies on; a piece that holds one inside is cut in two by the vertical line through
+// it, each half taken on its own (the point then lies on the cut). True when the piece was cut
+// (and its halves integrated).
+bool split_at_cone(SlowPath& sp, Piece& p, int depth) {
+    const double snap = kSnap * std::max({1.0, sp.cv.scale_x, sp.cv.scale_y});
+    for (int c = 0; c < sp.sing.cones; ++c) {
+        double cx, cy, x, y;
+        piece_centre(p, cx, cy);
+        if (!continued_point(sp.cv.dst, p.cell, sp.sing.cone_out[c], cx, cy, x, y)) continue;
+        int best = -1;
+        double best_d = 1e300, best_t = 0.0;
+        for (int k = 0; k < p.n; ++k) {
+            double t, dist = edge_distance(p, k, x, y, t);
+            if (dist < best_d) {
+                best_d = dist;
+                best = k;
+                best_t = t;
+            }
+        }
+        if (best < 0) continue;
+        if (best_d > snap) {
+            if (!inside_piece(p, x, y)) continue;
+            for (int side = 0; side < 2; ++side) {
+                Piece half;
+                clip_piece(p, 1.0, 0.0, x, side == 0, half);
+                if (half.n > 0) process_piece(sp, half, depth + 1);
+            }
+            return true;
+        }
+        int next = best + 1 == p.n ? 0 : best + 1;
+        double px, py;
+        edge_point(p, best, best_t, px, py);
+        if (std::hypot(px - p.v[best].x, py - p.v[best].y) <= snap) {
+            p.v[best].cone = c;
+        } else if (std::hypot(px - p.v[next].x, py - p.v[next].y) <= snap) {
+            p.v[next].cone = c;
+        } else if (p.n < kPieceVertices) {
+            // The edge's image bends at the point (a half turn there is a quarter turn in the
+            // square): both halves are refined as fold edges, neither kept as the tile's chord.
+            p.v[best].chord = false;
+            p.v[best].fold = true;
+            PieceVertex v = p.v[best];
+            v.x = px;
+            v.y = py;
+            v.mapped = false;
+            v.snapped = -1;
+            v.boundary = false;
+            v.cone = c;
+            for (int k = p.n; k > best + 1; --k) p.v[k] = p.v[k - 1];
+            p.v[best + 1] = v;
+            ++p.n;
+        }
+    }
+    return false;
 }
 
 // Whether the image of an output segment is straight: its midpoint's image (mx, my) strays
@@ -259,6 +320,7 @@ int append_singular_run(SlowPath& sp, const Piece& p, const VertexFacts& f, int 
 bool side_path(SlowPath& sp, const Piece& p, int k, int64_t cell, double x, double y) {
     const int side = p.v[k].side;
     if (side < 0 || !sp.sides || sp.sides[side].mode != 2) return false;
+    if (p.v[k].cone >= 0 || p.v[(k + 1) % p.n].cone >= 0) return false;  // (cone_reference)
     const PieceVertex &s = p.v[k], &e = p.v[(k + 1) % p.n];
     if (s.x != sp.side_x[side][0] || s.y != sp.side_y[side][0] || e.x != sp.side_x[side][1] ||
         e.y != sp.side_y[side][1])
@@ -281,6 +343,41 @@ bool side_path(SlowPath& sp, const Piece& p, int k, int64_t cell, double x, doub
     return true;
 }
 
+// The reference for the vertex after cone vertex k: every point and its copy turned by half
+// a turn about the cone point lie equally far from it, so the next vertex cannot be placed
+// near the cone's image. Probes inside the piece close to the cone, swept in eight steps from
+// its edge before to its edge after, each placed near the one before (from (prev_x, prev_y),
+// the footprint's point before the cone), carry the side across: a step turns by an eighth of
+// the piece's corner at most (a quarter turn in the source, where the output's own map is
+// folded there too), and the last lies beside the edge after.
+bool cone_reference(const SlowPath& sp, const Piece& p, int k, int64_t cell, double prev_x,
+                    double prev_y, double& x, double& y) {
+    const int before = (k + p.n - 1) % p.n;
+    const double px = p.v[k].x, py = p.v[k].y;
+    double ax, ay, bx, by;
+    edge_point(p, before, 1.0 - 1e-3, ax, ay);
+    edge_point(p, k, 1e-3, bx, by);
+    const double r = 0.5 * std::min(std::hypot(ax - px, ay - py), std::hypot(bx - px, by - py));
+    if (!(r > 0.0)) return false;
+    const double a0 = std::atan2(ay - py, ax - px), a1 = std::atan2(by - py, bx - px);
+    // The piece runs with a positive shoelace area: its inside turns from the edge after to
+    // the edge before by increasing angle.
+    double turn = a0 - a1;
+    turn -= 2.0 * kPi * std::floor(turn / (2.0 * kPi));
+    x = prev_x;
+    y = prev_y;
+    const int steps = 8;
+    for (int m = 1; m < steps; ++m) {
+        const double ang = a0 - turn * double(m) / double(steps);
+        Vec3 d = output_direction(sp.cv, p.cell, px + r * std::cos(ang), py + r * std::sin(ang));
+        double qx, qy;
+        if (!continued_point(sp.cv.src, cell, d, x, y, qx, qy)) return false;
+        x = qx;
+        y = qy;
+    }
+    return true;
+}
+
 // The footprint of the piece in source cell `cell`, into sp.xs, sp.ys; false when it cannot
 // be built there (a vertex without a point in the cell, an edge that leaves it).
 bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t cell) {
@@ -288,7 +385,7 @@ bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t
     sp.ys.clear();
     const int n = p.n;
     int k0 = 0;
-    while (k0 < n && f.singular[k0] >= 0) ++k0;
+    while (k0 < n && (f.singular[k0] >= 0 || p.v[k0].cone >= 0)) ++k0;
     if (k0 == n) return false;
     double rx = p.v[k0].mapped ? p.v[k0].src.x : 0.0, ry = p.v[k0].mapped ? p.v[k0].src.y : 0.0;
     if (!p.v[k0].mapped) {
@@ -297,9 +394,12 @@ bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t
         ry = s.y;
     }
     int k = k0;
+    bool placed = false;  // (hx, hy): vertex k's point, as the edge before it placed it
+    double hx = 0.0, hy = 0.0;
     do {
-        double x, y;
-        if (!vertex_image(sp, p, f, k, cell, rx, ry, x, y)) return false;
+        double x = hx, y = hy;
+        if (!placed && !vertex_image(sp, p, f, k, cell, rx, ry, x, y)) return false;
+        placed = false;
         sp.xs.push_back(x);
         sp.ys.push_back(y);
         int next = (k + 1) % n;
@@ -307,11 +407,24 @@ bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t
             k = append_singular_run(sp, p, f, k, cell, x, y);
             if (k < 0) return false;
         } else {
-            double nx, ny;
-            if (!vertex_image(sp, p, f, next, cell, x, y, nx, ny)) return false;
-            if (!p.v[k].seam && !side_path(sp, p, k, cell, x, y) &&
+            double nx, ny, ref_x = x, ref_y = y;
+            if (p.v[k].cone >= 0) {
+                // The last point of the footprint off the cone's image.
+                size_t m = sp.xs.size() - 1;
+                while (m > 0 && std::hypot(sp.xs[m] - x, sp.ys[m] - y) <= 1e-9 * (1.0 + std::fabs(x))) --m;
+                if (!cone_reference(sp, p, k, cell, sp.xs[m], sp.ys[m], ref_x, ref_y)) return false;
+            }
+            if (!vertex_image(sp, p, f, next, cell, ref_x, ref_y, nx, ny)) return false;
+            // An edge between two vertices on one cone point (a rim arc over it) is that point.
+            const bool collapsed = p.v[k].cone >= 0 && p.v[next].cone == p.v[k].cone;
+            if (!p.v[k].seam && !collapsed && !side_path(sp, p, k, cell, x, y) &&
                 !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0))
                 return false;
+            // After a cone the next vertex keeps the point placed here (near the probe); the
+            // points after it are not ambiguous.
+            placed = p.v[k].cone >= 0;
+            hx = nx;
+            hy = ny;
             k = next;
         }
         rx = sp.xs.back();
@@ -358,8 +471,6 @@ bool close_around_singular(SlowPath& sp, int64_t cell, int s) {
     return true;
 }
 
-void process_piece(SlowPath& sp, Piece& p, int depth);
-
 // Cut the piece where its edges cross from one source cell to another (bisection), along the
 // chord between the two crossings; false unless there are exactly two.
 bool split_at_seam(SlowPath& sp, const Piece& p, const VertexFacts& f, int depth) {
@@ -385,6 +496,7 @@ bool split_at_seam(SlowPath& sp, const Piece& p, const VertexFacts& f, int depth
         v.mapped = false;
         v.boundary = true;
         v.snapped = -1;
+        v.cone = -1;
         if (count == 2) return false;
         cross[count++] = q.n;
         q.v[q.n++] = v;
@@ -451,6 +563,7 @@ void process_piece(SlowPath& sp, Piece& p, int depth) {
         add_leftover(sp, p);
         return;
     }
+    if (split_at_cone(sp, p, depth)) return;
     bool closure[2] = {false, false};
     place_singular(sp, p, closure);
     VertexFacts f;

@@ -40,6 +40,7 @@ constexpr int kMaxPieceDepth = 8;    // splits of a piece
 constexpr double kTinyPiece = 1e-9;
 constexpr double kSnap = 1e-5;       // output pixels: a singular point this near the boundary is on it
 constexpr double kRimStep = 2e-3;    // rad: steps of a rim arc in a disk source
+constexpr double kConeAngle = 1e-6;  // rad: a vertex this near a cone point stands on it
 
 // A pixel's running sums: colour times solid angle, and solid angle (sr).
 struct PixelSums {
@@ -65,6 +66,7 @@ struct SlowPath {
     const Singular& sing;
     GreenScratch green;
     std::vector<double> xs, ys;
+    std::vector<std::vector<double>> kink_scratch;
     PixelSums* sums = nullptr;
     const SidePath* sides = nullptr;  // the pixel's four sides, when its tile took them
     double side_x[4][2], side_y[4][2];  // their ends (output pixels)
@@ -84,8 +86,7 @@ struct TexelSink {
     bool flat(int64_t, int64_t) const { return false; }
     void row(int64_t) {}
     void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
-        TexelDensity t = model.texel(cell, ix, iy);
-        double w = sign * (t.m * area + t.gx * dx + t.gy * dy);
+        double w = sign * model.weight(cell, ix, iy, area, dx, dy);
         if (w == 0.0) return;
         const float* v = area_texel(model.image, model.g, cell, ix, iy);
         for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
@@ -101,7 +102,10 @@ inline void add_footprint(SlowPath& sp, int64_t cell) {
     polygon_moments(sp.xs.data(), sp.ys.data(), n, area, mx, my);
     if (!(std::fabs(area) > 0.0)) return;
     TexelSink sink{sp.model, cell, area > 0.0 ? 1.0 : -1.0, *sp.sums};
-    integrate_any(sp.xs.data(), sp.ys.data(), n, sink, sp.green);
+    split_at_kinks(sp.model.g, cell, sp.xs.data(), sp.ys.data(), n, sp.kink_scratch,
+                   [&](const double* xs, const double* ys, int m) {
+                       integrate_any(xs, ys, m, sink, sp.green);
+                   });
 }
 
 // A piece that did not resolve: the texel at its centre (no colour with `colour` false: a
@@ -140,8 +144,21 @@ struct VertexFacts {
 inline void vertex_facts(const SlowPath& sp, Piece& p, VertexFacts& f) {
     for (int k = 0; k < p.n; ++k) {
         PieceVertex& v = p.v[k];
-        f.dir[k] = v.mapped ? source_direction(sp.cv.src, v.src)
-                            : output_direction(sp.cv, p.cell, v.x, v.y);
+        f.dir[k] = v.cone >= 0 ? sp.sing.cone_src[v.cone]
+                   : v.mapped ? source_direction(sp.cv.src, v.src)
+                              : output_direction(sp.cv, p.cell, v.x, v.y);
+        // A vertex whose direction is a cone point (a mirror ball's rim over a folded
+        // square's -Z, say) stands on it: within kConeAngle, as a rim point r = 1 - 1e-16 of a
+        // mirror ball lies 1.4e-8 from -Z.
+        for (int c = 0; c < sp.sing.cones && v.cone < 0; ++c) {
+            const Vec3& q = sp.sing.cone_src[c];
+            const Vec3& d = f.dir[k];
+            if (std::sqrt((d.x - q.x) * (d.x - q.x) + (d.y - q.y) * (d.y - q.y) + (d.z - q.z) * (d.z - q.z)) <=
+                kConeAngle) {
+                v.cone = c;
+                f.dir[k] = q;
+            }
+        }
         int s = on_singular(sp.sing, f.dir[k]);
         if (s < 0 && v.snapped >= 0) s = v.snapped;
         f.singular[k] = s;
