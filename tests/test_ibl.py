@@ -78,6 +78,9 @@ def test_rough_level_of_a_constant_environment_is_that_constant(layout):
         )
 
 
+QUADRATURE = dict(n_xi=32, n_phi=32, n_r=24, n_psi=48)
+
+
 def _check_accuracy(chain, smooth, disk, mean_radiance):
     rng = np.random.default_rng(7)
     rough = [float(r) for r in chain.metadata["envconv:roughness"].split()]
@@ -85,7 +88,10 @@ def _check_accuracy(chain, smooth, disk, mean_radiance):
         size = N >> k
         alpha = rough[k] ** 2
         texels = _texels(size, 160, rng, None if disk is None else disk[0])
-        truth = texel_mean(lambda d, a=alpha: ggx_reference(d, a, smooth, disk), size, texels)
+        # 32 x 32 half-vector and 24 x 48 disk nodes: within 0.08 % of 48 x 48 and 32 x 64
+        # (measured on both environments below), 50 times under the 5 % allowed, 3 times faster.
+        truth = texel_mean(lambda d, a=alpha: ggx_reference(d, a, smooth, disk, **QUADRATURE),
+                           size, texels)  # fmt: skip
         got = _level_texels(chain.levels[k], size, texels)
         rms = np.sqrt(((got - truth) ** 2).sum() / (truth**2).sum())
         worst = np.abs(got - truth).max() / np.abs(truth).max(axis=1).min()
