@@ -328,7 +328,10 @@ def test_park_mean_radiance_is_kept_in_every_layout():
         result = envconv.convert(sky, name)
         width, rows_ = naive.image_size(name, result.size)
         jj, ii = np.mgrid[0:rows_, 0:width]
-        weights = _owned_solid_angles(name, result.size, jj.ravel(), ii.ravel(), samples=4)
+        # A disk's rim pixels need 4 x 4 sub-samples for their valid part; elsewhere a pixel's
+        # solid angle is smooth and 2 x 2 move the mean by 1.2e-5 at most (measured).
+        samples = 4 if naive.GRIDS[name][0] in naive.DISK_FAMILIES else 2
+        weights = _owned_solid_angles(name, result.size, jj.ravel(), ii.ravel(), samples)
         got = (result.pixels[..., :3].reshape(-1, 3) * weights[:, None]).sum(0) / weights.sum()
         np.testing.assert_allclose(got, mean, rtol=5e-3, err_msg=name)
 
