@@ -334,6 +334,26 @@ EdgePixels edge_pixels_for(bool grad, int64_t nch) {
     return nch == 3 ? edge_pixels<3, false> : nch == 4 ? edge_pixels<4, false> : edge_pixels<0, false>;
 }
 
+// The box of the corners of the direct pixels of rows [j0, j1) of the tile (empty, xmin >
+// xmax, where there are none).
+void direct_corner_box(const CornerGrid& g, const TileScratch& ts, int j0, int j1, double& xmin,
+                       double& xmax, double& ymin, double& ymax) {
+    xmin = ymin = 1e300;
+    xmax = ymax = -1e300;
+    for (int j = j0; j < j1; ++j) {
+        for (int i = 0; i < g.w; ++i) {
+            if (!ts.direct[size_t(j * g.w + i)]) continue;
+            for (int q = 0; q < 4; ++q) {
+                size_t k = g.at(i + (q & 1), j + (q >> 1));
+                xmin = std::min(xmin, g.x[k]);
+                xmax = std::max(xmax, g.x[k]);
+                ymin = std::min(ymin, g.y[k]);
+                ymax = std::max(ymax, g.y[k]);
+            }
+        }
+    }
+}
+
 // Build the prefix table over the corners of the direct pixels of rows [j0, j1) of the tile;
 // false when there are none, the box is too large or holds a texel that is not finite.
 bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0, int j1,
@@ -351,20 +371,7 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     if ((xmax - xmin + 2.0) * (ymax - ymin + 2.0) > double(kMaxTableTexels) ||
         ymin < double((g.ref_cell / s.columns) * s.cell_height() + s.guard) ||
         ymax >= double((g.ref_cell / s.columns) * s.cell_height() + s.guard + s.n)) {
-        xmin = ymin = 1e300;
-        xmax = ymax = -1e300;
-        for (int j = j0; j < j1; ++j) {
-            for (int i = 0; i < g.w; ++i) {
-                if (!ts.direct[size_t(j * g.w + i)]) continue;
-                for (int q = 0; q < 4; ++q) {
-                    size_t k = g.at(i + (q & 1), j + (q >> 1));
-                    xmin = std::min(xmin, g.x[k]);
-                    xmax = std::max(xmax, g.x[k]);
-                    ymin = std::min(ymin, g.y[k]);
-                    ymax = std::max(ymax, g.y[k]);
-                }
-            }
-        }
+        direct_corner_box(g, ts, j0, j1, xmin, xmax, ymin, ymax);
     }
     if (xmin > xmax) return false;
     if (ts.curved) {  // a curved tile's polylines may bulge past their corners
@@ -665,19 +672,8 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
 // Set the tile's density cache to the texel box of its direct pixels (their corners and, in a
 // curved tile, their polylines), or to no box where there are none or it is too large.
 void density_box(const CornerGrid& g, TileScratch& ts) {
-    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (int j = 0; j < g.h; ++j) {
-        for (int i = 0; i < g.w; ++i) {
-            if (!ts.direct[size_t(j * g.w + i)]) continue;
-            for (int q = 0; q < 4; ++q) {
-                size_t k = g.at(i + (q & 1), j + (q >> 1));
-                xmin = std::min(xmin, g.x[k]);
-                xmax = std::max(xmax, g.x[k]);
-                ymin = std::min(ymin, g.y[k]);
-                ymax = std::max(ymax, g.y[k]);
-            }
-        }
-    }
+    double xmin, xmax, ymin, ymax;
+    direct_corner_box(g, ts, 0, g.h, xmin, xmax, ymin, ymax);
     for (size_t k = 0; ts.curved && k < ts.edges.px.size(); ++k) {
         xmin = std::min(xmin, ts.edges.px[k]);
         xmax = std::max(xmax, ts.edges.px[k]);

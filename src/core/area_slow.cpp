@@ -54,6 +54,47 @@ bool inside_piece(const Piece& p, double x, double y) {
     return true;
 }
 
+// The edge of the piece nearest (x, y): its index (-1 for a piece without edges), distance
+// and the parameter t of the nearest point along it.
+int nearest_edge(const Piece& p, double x, double y, double& best_d, double& best_t) {
+    int best = -1;
+    best_d = 1e300;
+    best_t = 0.0;
+    for (int k = 0; k < p.n; ++k) {
+        double t, dist = edge_distance(p, k, x, y, t);
+        if (dist < best_d) {
+            best_d = dist;
+            best = k;
+            best_t = t;
+        }
+    }
+    return best;
+}
+
+// The vertex of the piece at the point t along edge `best` (which lies within snap of it): an
+// end of the edge within snap, else a new vertex inserted there (a copy of the edge's first
+// vertex, not mapped, on no boundary, holding no singular or cone point); -1 when the piece
+// has no room for one.
+int vertex_on_edge(Piece& p, int best, double t, double snap) {
+    int next = best + 1 == p.n ? 0 : best + 1;
+    double px, py;
+    edge_point(p, best, t, px, py);
+    if (std::hypot(px - p.v[best].x, py - p.v[best].y) <= snap) return best;
+    if (std::hypot(px - p.v[next].x, py - p.v[next].y) <= snap) return next;
+    if (p.n >= kPieceVertices) return -1;
+    PieceVertex v = p.v[best];
+    v.x = px;
+    v.y = py;
+    v.mapped = false;
+    v.snapped = -1;
+    v.boundary = false;
+    v.cone = -1;
+    for (int k = p.n; k > best + 1; --k) p.v[k] = p.v[k - 1];
+    p.v[best + 1] = v;
+    ++p.n;
+    return best + 1;
+}
+
 // Put each source singular point that lands in the piece on it: onto the vertex or edge it
 // lies on (within kSnap), else mark it for closure.
 void place_singular(const SlowPath& sp, Piece& p, bool closure[2]) {
@@ -62,40 +103,15 @@ void place_singular(const SlowPath& sp, Piece& p, bool closure[2]) {
         double cx, cy, x, y;
         piece_centre(p, cx, cy);
         if (!continued_point(sp.cv.dst, p.cell, sp.sing.out[s], cx, cy, x, y)) continue;
-        int best = -1;
-        double best_d = 1e300, best_t = 0.0;
-        for (int k = 0; k < p.n; ++k) {
-            double t, dist = edge_distance(p, k, x, y, t);
-            if (dist < best_d) {
-                best_d = dist;
-                best = k;
-                best_t = t;
-            }
-        }
+        double best_d, best_t;
+        int best = nearest_edge(p, x, y, best_d, best_t);
         if (best < 0) continue;
         if (best_d > snap) {
             if (inside_piece(p, x, y)) closure[s] = true;
             continue;
         }
-        int next = best + 1 == p.n ? 0 : best + 1;
-        double px, py;
-        edge_point(p, best, best_t, px, py);
-        if (std::hypot(px - p.v[best].x, py - p.v[best].y) <= snap) {
-            p.v[best].snapped = s;
-        } else if (std::hypot(px - p.v[next].x, py - p.v[next].y) <= snap) {
-            p.v[next].snapped = s;
-        } else if (p.n < kPieceVertices) {
-            PieceVertex v = p.v[best];
-            v.x = px;
-            v.y = py;
-            v.mapped = false;
-            v.snapped = s;
-            v.boundary = false;
-            v.cone = -1;
-            for (int k = p.n; k > best + 1; --k) p.v[k] = p.v[k - 1];
-            p.v[best + 1] = v;
-            ++p.n;
-        }
+        int at = vertex_on_edge(p, best, best_t, snap);
+        if (at >= 0) p.v[at].snapped = s;
     }
 }
 
@@ -110,16 +126,8 @@ bool split_at_cone(SlowPath& sp, Piece& p, int depth) {
         double cx, cy, x, y;
         piece_centre(p, cx, cy);
         if (!continued_point(sp.cv.dst, p.cell, sp.sing.cone_out[c], cx, cy, x, y)) continue;
-        int best = -1;
-        double best_d = 1e300, best_t = 0.0;
-        for (int k = 0; k < p.n; ++k) {
-            double t, dist = edge_distance(p, k, x, y, t);
-            if (dist < best_d) {
-                best_d = dist;
-                best = k;
-                best_t = t;
-            }
-        }
+        double best_d, best_t;
+        int best = nearest_edge(p, x, y, best_d, best_t);
         if (best < 0) continue;
         if (best_d > snap) {
             if (!inside_piece(p, x, y)) continue;
@@ -130,28 +138,16 @@ bool split_at_cone(SlowPath& sp, Piece& p, int depth) {
             }
             return true;
         }
-        int next = best + 1 == p.n ? 0 : best + 1;
-        double px, py;
-        edge_point(p, best, best_t, px, py);
-        if (std::hypot(px - p.v[best].x, py - p.v[best].y) <= snap) {
-            p.v[best].cone = c;
-        } else if (std::hypot(px - p.v[next].x, py - p.v[next].y) <= snap) {
-            p.v[next].cone = c;
-        } else if (p.n < kPieceVertices) {
-            // The edge's image bends at the point (a half turn there is a quarter turn in the
-            // square): both halves are refined as fold edges, neither kept as the tile's chord.
-            p.v[best].chord = false;
-            p.v[best].fold = true;
-            PieceVertex v = p.v[best];
-            v.x = px;
-            v.y = py;
-            v.mapped = false;
-            v.snapped = -1;
-            v.boundary = false;
-            v.cone = c;
-            for (int k = p.n; k > best + 1; --k) p.v[k] = p.v[k - 1];
-            p.v[best + 1] = v;
-            ++p.n;
+        const int n = p.n;
+        int at = vertex_on_edge(p, best, best_t, snap);
+        if (at < 0) continue;
+        p.v[at].cone = c;
+        if (p.n > n) {
+            // A new vertex: the edge's image bends at the point (a half turn there is a quarter
+            // turn in the square), so both halves are refined as fold edges, neither kept as
+            // the tile's chord.
+            p.v[best].chord = p.v[at].chord = false;
+            p.v[best].fold = p.v[at].fold = true;
         }
     }
     return false;

@@ -21,6 +21,7 @@
 #include <limits>
 #include <vector>
 
+#include "green.h"
 #include "taps.h"
 
 namespace envconv {
@@ -518,13 +519,8 @@ void split_at_kinks(const Geometry& g, int64_t cell, const double* xs, const dou
     }
     // The lines that cross the polygon's box (a superset: a line that misses the polygon
     // leaves one side empty).
-    double xmin = xs[0], xmax = xs[0], ymin = ys[0], ymax = ys[0];
-    for (int k = 1; k < n; ++k) {
-        xmin = std::min(xmin, xs[k]);
-        xmax = std::max(xmax, xs[k]);
-        ymin = std::min(ymin, ys[k]);
-        ymax = std::max(ymax, ys[k]);
-    }
+    double xmin, xmax, ymin, ymax;
+    polygon_box(xs, ys, n, xmin, xmax, ymin, ymax);
     double lo[4] = {1e300, 1e300, 1e300, 1e300}, hi[4] = {-1e300, -1e300, -1e300, -1e300};
     for (int q = 0; q < 4; ++q) {
         double a, b;

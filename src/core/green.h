@@ -99,19 +99,27 @@ inline void add_row_segment(GreenScratch& s, int64_t c0, double row_mid, double 
 
 }  // namespace green_detail
 
-// Integrate the closed polygon (xs, ys) of n vertices over the texel grid, calling
-// sink.texel(ix, iy, area, dx, dy) once for every texel it overlaps (signed values, see
-// above); sink.row(iy) is called before the texels of each row.
-template <class Sink>
-void integrate(const double* xs, const double* ys, int n, Sink& sink, GreenScratch& s) {
-    if (n < 3) return;
-    double xmin = xs[0], xmax = xs[0], ymin = ys[0], ymax = ys[0];
+// The box [xmin, xmax] x [ymin, ymax] of the n >= 1 points (xs, ys).
+inline void polygon_box(const double* xs, const double* ys, int n, double& xmin, double& xmax,
+                        double& ymin, double& ymax) {
+    xmin = xmax = xs[0];
+    ymin = ymax = ys[0];
     for (int k = 1; k < n; ++k) {
         xmin = std::min(xmin, xs[k]);
         xmax = std::max(xmax, xs[k]);
         ymin = std::min(ymin, ys[k]);
         ymax = std::max(ymax, ys[k]);
     }
+}
+
+// Integrate the closed polygon (xs, ys) of n vertices over the texel grid, calling
+// sink.texel(ix, iy, area, dx, dy) once for every texel it overlaps (signed values, see
+// above); sink.row(iy) is called before the texels of each row.
+template <class Sink>
+void integrate(const double* xs, const double* ys, int n, Sink& sink, GreenScratch& s) {
+    if (n < 3) return;
+    double xmin, xmax, ymin, ymax;
+    polygon_box(xs, ys, n, xmin, xmax, ymin, ymax);
     if (!(xmin <= xmax && ymin <= ymax)) return;  // NaN
     int64_t c0 = int64_t(std::floor(xmin)), c1 = int64_t(std::floor(xmax));
     int64_t r0 = int64_t(std::floor(ymin)), r1 = int64_t(std::floor(ymax));
@@ -217,13 +225,8 @@ inline void small_segment(SmallCell* row, int64_t c0, double row_mid, double xa,
 // Returns false (and does nothing) when the bounding box is too large; integrate() then.
 template <class Sink>
 bool integrate_small(const double* xs, const double* ys, int n, Sink& sink) {
-    double xmin = xs[0], xmax = xs[0], ymin = ys[0], ymax = ys[0];
-    for (int k = 1; k < n; ++k) {
-        xmin = std::min(xmin, xs[k]);
-        xmax = std::max(xmax, xs[k]);
-        ymin = std::min(ymin, ys[k]);
-        ymax = std::max(ymax, ys[k]);
-    }
+    double xmin, xmax, ymin, ymax;
+    polygon_box(xs, ys, n, xmin, xmax, ymin, ymax);
     if (!(xmin <= xmax && ymin <= ymax)) return true;  // NaN: nothing
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax);
     int64_t r0 = floor_texel(ymin), r1 = floor_texel(ymax);
@@ -370,13 +373,8 @@ void integrate_walk(const double* xs, const double* ys, int n, int64_t c0, int64
 // integrate() choosing the cheapest exact way: one texel, 2 x 2 texels, kSmallCells, or rows.
 template <class Sink>
 void integrate_any(const double* xs, const double* ys, int n, Sink& sink, GreenScratch& s) {
-    double xmin = xs[0], xmax = xs[0], ymin = ys[0], ymax = ys[0];
-    for (int k = 1; k < n; ++k) {
-        xmin = std::min(xmin, xs[k]);
-        xmax = std::max(xmax, xs[k]);
-        ymin = std::min(ymin, ys[k]);
-        ymax = std::max(ymax, ys[k]);
-    }
+    double xmin, xmax, ymin, ymax;
+    polygon_box(xs, ys, n, xmin, xmax, ymin, ymax);
     if (!(xmin <= xmax && ymin <= ymax) || !(xmax - xmin < 1e9 && ymax - ymin < 1e9)) return;
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax);
     int64_t r0 = floor_texel(ymin), r1 = floor_texel(ymax);
