@@ -44,12 +44,14 @@ def wheel(tmp_path_factory):
 
 def test_the_wheel_installs_into_a_fresh_venv_and_converts(wheel, tmp_path):
     env_dir = tmp_path / "venv"
-    venv.create(env_dir, with_pip=True)
+    # No pip of its own (ensurepip: 5 s): this venv's pip installs into it (``--python``).
+    venv.create(env_dir, with_pip=False)
     python = env_dir / "bin" / "python"
     purelib = _run(str(python), "-c", "import sysconfig; print(sysconfig.get_path('purelib'))")
     site = Path(purelib.stdout.strip())
     (site / "test-venv.pth").write_text(sysconfig.get_path("purelib") + "\n")
-    _run(str(python), "-m", "pip", "install", "--quiet", "--no-deps", "--no-index", str(wheel))
+    _run(sys.executable, "-m", "pip", "--python", str(python), "install", "--quiet", "--no-deps",
+         "--no-index", str(wheel))  # fmt: skip
     # envconv comes from the wheel, with its compiled core, not from the checkout.
     where = _run(str(python), "-c", "import envconv, envconv._core as c; print(envconv.__file__, c.__file__)",
                  cwd=tmp_path)  # fmt: skip
