@@ -90,8 +90,6 @@ def _energy_per_sun(result, name, sun_dirs, channel):
     """Σ value · Ω of the lit pixels of ``result``, per sun: in each channel, each lit pixel is
     given to that channel's sun nearest the pixel's centre."""
     energy = np.zeros(len(sun_dirs))
-    # Small maps and a mirror ball's or angular map's rim pixels need more sub-samples.
-    samples = 64 if result.size < 64 or name in SINGULAR_RIM else 16
     for c in range(CHANNELS):
         value = result.pixels[..., c]
         rows, cols = np.nonzero(value)
@@ -99,7 +97,18 @@ def _energy_per_sun(result, name, sun_dirs, channel):
         centres, _, _ = naive.uv_to_dir(name, (cols + 0.5) / width, (rows + 0.5) / height)
         mine = np.flatnonzero(channel == c)
         owner = mine[np.argmax(centres @ sun_dirs[mine].T, axis=1)]
-        omega = _owned_solid_angles(name, result.size, rows, cols, samples)
+        # Small maps, and the pixels of a mirror ball's or angular map's last 8 rings (where
+        # the density runs to its singular rim), need 64 x 64 sub-samples; 16 x 16 elsewhere.
+        rim = np.full(len(rows), result.size < 64)
+        if name in SINGULAR_RIM:
+            a, b = 2 * (cols + 0.5) / width - 1, 2 * (rows + 0.5) / height - 1
+            rim |= np.hypot(a, b) > 1 - 16 / result.size
+        omega = np.empty(len(rows))
+        for near, samples in ((rim, 64), (~rim, 16)):
+            if near.any():
+                omega[near] = _owned_solid_angles(
+                    name, result.size, rows[near], cols[near], samples
+                )
         energy += np.bincount(owner, value[rows, cols] * omega, minlength=len(sun_dirs))
     return energy
 
