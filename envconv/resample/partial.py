@@ -30,7 +30,10 @@ __all__ = ["pad_partial", "covered_mask"]
 #: Sub-columns across a pixel the rim crosses, in which the covered part of each column is
 #: exact (between the rim's two heights); the density is taken at 3 Gauss points of it.
 RIM_COLUMNS = 64
-_GAUSS = (np.array([-math.sqrt(0.6), 0.0, math.sqrt(0.6)]) * 0.5 + 0.5, np.array([5.0, 8.0, 5.0]) / 18.0)
+_GAUSS = (
+    np.array([-math.sqrt(0.6), 0.0, math.sqrt(0.6)]) * 0.5 + 0.5,
+    np.array([5.0, 8.0, 5.0]) / 18.0,
+)
 
 
 def covered_mask(layout, n: int, guard: int) -> np.ndarray:
@@ -76,7 +79,7 @@ def _disk_cover(layout, face: int, cw: int, ch: int, n: int, guard: int) -> np.n
     half = np.sqrt(np.maximum(1.0 - sx * sx, 0.0))
     lo, hi = np.clip(-half, top, top + scale), np.clip(half, top, top + scale)
     whole = covered = 0.0
-    for t, w in zip(nodes, weights):
+    for t, w in zip(nodes, weights, strict=True):
         whole = whole + w * scale * layout.density(face, sx, top + t * scale)
         covered = covered + w * (hi - lo) * layout.density(face, sx, lo + t * (hi - lo))
     cover[rim] = covered.sum(axis=1) / whole.sum(axis=1)
