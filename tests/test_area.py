@@ -312,6 +312,63 @@ def test_sun_on_a_mirror_ball_rim_keeps_its_energy():
     np.testing.assert_allclose(energy, truth, atol=2e-3 * SUN * texel)
 
 
+def _partial_suns(name, size):
+    """(rows, cols, directions, channel, on_edge) of one-texel suns of a partial view: in each
+    channel 4 on texels its edge or rim crosses (a tenth covered at least) or borders and 4
+    inside, 0.35 rad apart; a sun's direction is the mean of its texel's covered sub-samples
+    (a rim texel's centre may lie outside the view)."""
+    width, height = naive.image_size(name, size)
+    t = (np.arange(8) + 0.5) / 8
+    rows, cols = np.mgrid[0:height, 0:width].reshape(2, -1)
+    u, v = np.broadcast_arrays((cols[:, None, None] + t[None, None, :]) / width,
+                               (rows[:, None, None] + t[None, :, None]) / height)  # fmt: skip
+    dirs, valid, _ = naive.uv_to_dir(name, u, v)
+    border = (rows == 0) | (cols == 0) | (rows == height - 1) | (cols == width - 1)
+    edge = valid.any(axis=(1, 2)) & (~valid.all(axis=(1, 2)) | border)
+    mean = (dirs * valid[..., None]).sum(axis=(1, 2))
+    mean /= np.maximum(np.linalg.norm(mean, axis=-1, keepdims=True), 1e-300)
+    rng = np.random.default_rng(size)
+    chosen, channel = [], []
+    for c in range(CHANNELS):
+        mine = []
+        for pool in (np.flatnonzero(edge & (valid.mean(axis=(1, 2)) >= 0.1)),
+                     np.flatnonzero(valid.all(axis=(1, 2)) & ~edge)):  # fmt: skip
+            count = len(mine) + 4
+            for k in rng.permutation(pool):
+                if all(mean[k] @ mean[j] < math.cos(0.35) for j in mine):
+                    mine.append(k)
+                if len(mine) == count:
+                    break
+        chosen += mine
+        channel += [c] * len(mine)
+    chosen = np.array(chosen)
+    return rows[chosen], cols[chosen], mean[chosen], np.array(channel), edge[chosen]
+
+
+@pytest.mark.parametrize("source_name", ["perspective", "fisheye"])
+@pytest.mark.parametrize("to, ratio", [("latlong", 1), ("latlong", 4), ("cube-vcross", 1),
+                                       ("cube-vcross", 4)])  # fmt: skip
+def test_sun_of_a_partial_view_keeps_its_energy(source_name, to, ratio):
+    """A partial view (a 90° perspective view, a 180° fisheye) takes the area filter by default:
+    one-texel suns on the texels its edge or rim crosses or borders, and inside it, keep their
+    energy (value × alpha × the output pixel's solid angle; truth: the covered part of the
+    texel's solid angle from naive's formulas, 256 × 256 sub-samples). The area filter read
+    the ring of hole pixels around the view as its edge texels: a sun on a perspective view's
+    edge got 3.7 times its energy (the bilinear kernel 0.76-1.26 times)."""
+    size = 64
+    width, height = naive.image_size(source_name, size)
+    rows, cols, dirs, channel, on_edge = _partial_suns(source_name, size)
+    assert on_edge.sum() == 4 * CHANNELS and (~on_edge).sum() == 4 * CHANNELS
+    pixels = np.zeros((height, width, CHANNELS), np.float32)
+    pixels[rows, cols, channel] = SUN
+    source = envconv.EnvMap(pixels, source_name)
+    truth = SUN * _owned_solid_angles(source_name, size, rows, cols, samples=256)
+    n = max(1, round(default_size(source, to) / ratio))
+    out = envconv.convert(source, to, size=n, alpha=True)
+    seen = envconv.EnvMap(out.pixels[..., :CHANNELS] * out.pixels[..., CHANNELS:], to)
+    np.testing.assert_allclose(_energy_per_sun(seen, to, dirs, channel), truth, rtol=5e-3)
+
+
 def test_more_than_64_channels_with_sub_pixels():
     """70 channels at samples 2: every channel of a constant map stays its constant (the
     sub-pixel sums were held in 64 slots)."""

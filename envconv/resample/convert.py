@@ -120,8 +120,8 @@ def convert(
         ``area``: each pixel the exact solid-angle mean of the box-reconstructed source over
         its footprint (every texel's energy kept); the others read the source at sub-sample
         points through that filter. Default: ``area``, or ``bilinear`` where the area filter
-        cannot make the result yet (a partial view as input, or a guard ring around a partial
-        view: :func:`envconv.resample.options.choose_filter`).
+        cannot make the result yet (a guard ring around a partial view:
+        :func:`envconv.resample.options.choose_filter`).
     rotate : "YAW,PITCH,ROLL" or 3 numbers, optional
         Rotation of the environment in degrees (see :mod:`envconv.layouts.rotation`).
     guard : int or "fill"

@@ -135,17 +135,16 @@ def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float
 
 def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | None = None) -> str:
     """The filter a conversion uses: ``requested``, or without one the area filter, except
-    where it cannot make the result yet (a partial view as input or as a guarded output), which
-    takes the bilinear point kernel. UsageError when ``area`` is asked for there, or the name
+    where it cannot make the result yet (a partial view as a guarded output), which takes the
+    bilinear point kernel. A partial view as input takes the area filter: the part of a
+    footprint outside the view is a hole (:mod:`envconv.resample.partial`). UsageError when ``area`` is asked for there, or the name
     is unknown. A guard ring around a whole-sphere layout takes the area filter: its pixels are
     the area filter's, its ring what a GPU reads across the edge of that map
     (:func:`envconv.resample.convert.convert`)."""
     if requested is not None and requested not in FILTERS:
         raise UsageError(f"unknown filter {requested!r}; choose one of {', '.join(FILTERS)}")
     reason = None
-    if source.layout.partial:
-        reason = "a partial view as input"
-    elif guard not in (0, None) and to is not None and to.partial:
+    if guard not in (0, None) and to is not None and to.partial:
         reason = "a guard ring around a partial view"
     if requested is None:
         return "bilinear" if reason else "area"

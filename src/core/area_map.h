@@ -135,10 +135,15 @@ inline Vec3 output_direction(const Conversion& cv, int64_t cell, double x, doubl
 // colour, in a cell of its own (kUncovered), so that the coverage it leaves is exact.
 constexpr int64_t kUncovered = -2;
 
+// True for a partial source (padded, with a reach).
+inline bool partial_source(const Geometry& src) {
+    return src.param[kReach] > 0.0 && (src.family == kFisheye || src.family == kPerspective);
+}
+
 // False when direction d lies beyond a partial source's reach.
 inline bool source_covers(const Geometry& src, const Vec3& d) {
     const double reach = src.param[kReach];
-    if (reach <= 0.0 || (src.family != kFisheye && src.family != kPerspective)) return true;
+    if (!partial_source(src)) return true;
     Vec3 v = view::to_view(src, d.x, d.y, d.z);
     if (src.family == kFisheye)
         return std::atan2(std::hypot(v.x, v.y), v.z) <= src.param[kScaleX] * reach;

@@ -565,11 +565,12 @@ void process_piece(SlowPath& sp, Piece& p, int depth) {
     VertexFacts f;
     vertex_facts(sp, p, f);
     int64_t cell = -1;
-    bool several = false;
+    bool several = false, seen = false;  // not cell < 0: kUncovered (-2) is a cell here
     for (int k = 0; k < p.n; ++k) {
         if (f.singular[k] >= 0 || p.v[k].boundary) continue;
-        if (cell < 0) cell = f.cell[k];
+        if (!seen) cell = f.cell[k];
         else if (f.cell[k] != cell) several = true;
+        seen = true;
     }
     if (several) {
         if (!split_at_seam(sp, p, f, depth)) split_or_leftover(sp, p, depth);
@@ -591,6 +592,7 @@ void process_piece(SlowPath& sp, Piece& p, int depth) {
         split_or_leftover(sp, p, depth);
         return;
     }
+    if (partial_source(sp.cv.src)) sp.out_weight += piece_solid_angle(sp, p);
     add_footprint(sp, cell);
 }
 
@@ -717,8 +719,19 @@ bool refine_segment(const Conversion& cv, const Singular& sing, int64_t ocell, d
     return refine_segment(cv, sing, ocell, ox, oy, ox1, oy1, cell, mx, my, x1, y1, tol, xs, ys, depth + 1);
 }
 
+void slow_rect_pieces(SlowPath& sp, double x0, double y0, double x1, double y1,
+                      const SourcePoint* corners, const SidePath* sides);
+
 void slow_rect(SlowPath& sp, double x0, double y0, double x1, double y1,
                const SourcePoint* corners, const SidePath* sides) {
+    sp.out_weight = 0.0;
+    sp.uncovered = false;
+    slow_rect_pieces(sp, x0, y0, x1, y1, corners, sides);
+    if (sp.uncovered && sp.out_weight > 0.0) sp.sums->weight = sp.out_weight;
+}
+
+void slow_rect_pieces(SlowPath& sp, double x0, double y0, double x1, double y1,
+                      const SourcePoint* corners, const SidePath* sides) {
     sp.sides = sides;
     const double cx[4] = {x0, x1, x1, x0}, cy[4] = {y0, y0, y1, y1};
     for (int k = 0; k < 4; ++k) {

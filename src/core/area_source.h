@@ -598,9 +598,17 @@ void split_at_kinks(const Geometry& g, int64_t cell, const double* xs, const dou
 
 // True when texel (ix, iy) of `cell`'s grid holds data the area filter reads as it is: inside
 // the cell's valid region (the face, not its guard ring), or for a disk, a texel whose square
-// meets the disk.
+// meets the disk. A partial source (padded by resample/partial.py, param[kReach] > 0) reads
+// its whole cell, guard ring included: every texel there is its own colour x V (0 off the
+// view), and a footprint past the view's edge, up to the reach, lies on those texels (read
+// through remap_tap, the ring's texels gave the edge texel's colour: a sun on a perspective
+// view's edge texel got 3.7 times its energy).
 inline bool area_readable(const Geometry& g, int64_t cell, int64_t ix, int64_t iy) {
     int64_t cw = g.cell_width(), ch = g.cell_height();
+    if (g.param[kReach] > 0.0 && (g.family == kFisheye || g.family == kPerspective)) {
+        int64_t cx0 = (cell % g.columns) * cw, cy0 = (cell / g.columns) * ch;
+        return ix >= cx0 && ix < cx0 + cw && iy >= cy0 && iy < cy0 + ch;
+    }
     int64_t x0 = (cell % g.columns) * cw + g.guard, y0 = (cell / g.columns) * ch + g.guard;
     int64_t w = g.nx, h = g.n;
     if (ix < x0 || ix >= x0 + w || iy < y0 || iy >= y0 + h) return false;
