@@ -144,7 +144,12 @@ def test_real_process_error_and_success(tmp_path, sky):
 
 
 def test_threads_option_gives_the_same_file(tmp_path, sky):
-    """--threads 1 and --threads 3 resample alike, byte for byte; --threads 0 is a usage error."""
+    """--threads 1 and --threads 3 resample alike, byte for byte; --threads 0 is a usage error.
+    A command run in this process leaves the process's thread count as it found it (it stayed
+    3, and a later memory estimate in the same test process counted a third thread's scratch)."""
+    from envconv.resample import kernels
+
+    before = kernels.get_threads()
     outs = []
     for threads in (1, 3):
         out = tmp_path / f"t{threads}.exr"
@@ -153,6 +158,7 @@ def test_threads_option_gives_the_same_file(tmp_path, sky):
         assert result.exit_code == 0, result.stderr
         outs.append(envconv.read(out).pixels)
     assert outs[0].tobytes() == outs[1].tobytes()
+    assert kernels.get_threads() == before
     bad = run_cli(["--threads", 0, "convert", sky, tmp_path / "x.exr", "--to", "angular"])
     assert bad.exit_code == 2 and len(stderr_lines(bad)) == 1
 

@@ -227,7 +227,10 @@ def cli(verbose: int, threads: int | None) -> None:
     if threads is not None:
         from ..resample.kernels import set_threads
 
-        set_threads(threads)
+        # Restored when the command ends: a command run in a library's process (click's
+        # runner, a test) leaves the process's count as it found it.
+        previous_threads = set_threads(threads)
+        click.get_current_context().call_on_close(lambda: set_threads(previous_threads))
 
 
 def _say(line: str) -> None:
