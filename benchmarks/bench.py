@@ -17,9 +17,10 @@ Run by hand and quote the figures; nothing here is a test.
     python benchmarks/bench.py ibl --baseline PYTHON
                                             # the same, interleaved with another venv's envconv
     python benchmarks/bench.py preview      # contact sheet and viewer page of a 16K lat-long, in process
-    python benchmarks/bench.py filters [--rounds R] [--threads T]
+    python benchmarks/bench.py filters [--rounds R] [--threads T] [--oneshot]
                                             # the area filter against the point kernel at
-                                            # S = 1, 4 and auto, interleaved (benchmarks/filters.py)
+                                            # S = 1, 4 and auto, interleaved (benchmarks/filters.py);
+                                            # --oneshot: the whole envconv convert, area against bilinear
     python benchmarks/bench.py memory       # peak RSS over (input + output arrays), per case,
                                             # beside envconv.engine.memory's estimate (docs/memory.md)
 
@@ -419,7 +420,10 @@ def main(argv: list[str]) -> None:
 
         rounds = int(which[which.index("--rounds") + 1]) if "--rounds" in which else 9
         threads = int(which[which.index("--threads") + 1]) if "--threads" in which else None
-        filters.bench_filters(_latlong(1024), rounds, threads)
+        if "--oneshot" in which:
+            filters.bench_oneshot(_latlong(1024), rounds)
+        else:
+            filters.bench_filters(_latlong(1024), rounds, threads)
         return
     if which[0] == "versus":
         if len(which) != 2:

@@ -21,7 +21,7 @@ import time
 
 import envconv
 
-__all__ = ["CASES", "bench_filters"]
+__all__ = ["CASES", "bench_filters", "ONESHOT_CASES", "bench_oneshot"]
 
 #: (label, source layout, convert keyword arguments)
 CASES = [
@@ -55,3 +55,50 @@ def bench_filters(source: envconv.EnvMap, rounds: int = 9, threads: int | None =
     for label, median in medians.items():
         print(f"  {label:28s} {median * 1e3:8.1f} ms   x{median / s1:5.2f} of bilinear S=1"
               f"   x{median / auto:5.2f} of the old default")  # fmt: skip
+
+
+#: (label, extra ``envconv convert`` arguments) of the one-shot comparison.
+ONESHOT_CASES = [
+    ("default (area)", []),
+    ("--filter area", ["--filter", "area"]),
+    ("--filter bilinear (old default)", ["--filter", "bilinear"]),
+]
+
+
+def bench_oneshot(source: envconv.EnvMap, rounds: int = 24) -> None:
+    """The whole one shot of issue 26: ``envconv convert`` of ``source`` written as a float zip
+    EXR → cube-vcross 512 (zip), a fresh process each time, every case of ONESHOT_CASES once a
+    round in a rotating order, the first round dropped. The two area labels run the same
+    filter: the gap between their medians is the machine's noise."""
+    import os
+    import shutil
+    import subprocess
+    import sys
+    import tempfile
+
+    exe = shutil.which("envconv", path=os.path.dirname(sys.executable)) or "envconv"
+    with tempfile.TemporaryDirectory() as folder:
+        src = os.path.join(folder, "in.exr")
+        envconv.write(source, src, bit_depth="float")
+        times: dict[str, list[float]] = {label: [] for label, _ in ONESHOT_CASES}
+        for r in range(rounds + 1):
+            order = (
+                ONESHOT_CASES[r % len(ONESHOT_CASES) :] + ONESHOT_CASES[: r % len(ONESHOT_CASES)]
+            )
+            for label, extra in order:
+                out = os.path.join(folder, "out.exr")
+                if os.path.exists(out):
+                    os.remove(out)
+                start = time.perf_counter()
+                subprocess.run([exe, "convert", src, out, "--to", "cube-vcross", "--size", "512",
+                                *extra], check=True, stdout=subprocess.DEVNULL)  # fmt: skip
+                if r:
+                    times[label].append(time.perf_counter() - start)
+    medians = {label: statistics.median(t) for label, t in times.items()}
+    old = medians["--filter bilinear (old default)"]
+    print(f"one shot: envconv convert lat-long 2048x1024 float EXR -> cube-vcross 512, "
+          f"{rounds} interleaved rounds")  # fmt: skip
+    for label, median in medians.items():
+        print(
+            f"  {label:32s} {median:7.3f} s   {100 * (median / old - 1):+6.1f} % over the old default"
+        )
