@@ -134,13 +134,13 @@ def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float
 
 
 def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | None = None) -> str:
-    """The filter a conversion uses: ``requested``, or without one the area filter, except
-    where it cannot make the result yet (a partial view as a guarded output), which takes the
-    bilinear point kernel. A partial view as input takes the area filter: the part of a
-    footprint outside the view is a hole (:mod:`envconv.resample.partial`). UsageError when ``area`` is asked for there, or the name
-    is unknown. A guard ring around a whole-sphere layout takes the area filter: its pixels are
-    the area filter's, its ring what a GPU reads across the edge of that map
-    (:func:`envconv.resample.convert.convert`)."""
+    """The filter a conversion uses: ``requested``, or without one the area filter, except for
+    a guard ring around a partial view (an output ``to`` that is a view), which takes the
+    bilinear point kernel; UsageError when ``area`` is asked for there, or the name is unknown.
+    Everything else takes the area filter: a partial view as input (the part of a footprint
+    outside the view is a hole, :mod:`envconv.resample.partial`) and a guard ring around a
+    whole-sphere layout (its cells the area filter's, its ring what a GPU reads across their
+    edge: :func:`envconv.resample.convert.convert`)."""
     if requested is not None and requested not in FILTERS:
         raise UsageError(f"unknown filter {requested!r}; choose one of {', '.join(FILTERS)}")
     reason = None
