@@ -525,37 +525,40 @@ double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx,
     double spacing = std::fabs(tx * sy - ty * sx);
     dx = dy = 0.0;
     if (!(spacing > 0.0)) return -1.0;
-    double bends[2], vx[2], vy[2];
-    int count = 0;
-    if (at >= 1) {
-        vx[count] = x[k0 - step] - 2.0 * x[k0] + x[k1];
-        vy[count] = y[k0 - step] - 2.0 * y[k0] + y[k1];
-        ++count;
+    // The second differences at the two ends, in scalars (as arrays they were stored one by one
+    // and read back in pairs, a stall on every edge); one division a bend (x / s / 8 and
+    // x / (8 s) round alike).
+    const bool first = at >= 1, second = at + 2 <= n;
+    if (!first && !second) return -1.0;
+    const double eight_spacing = 8.0 * spacing;
+    auto bend = [&](double vx, double vy) { return std::fabs(tx * vy - ty * vx) / eight_spacing; };
+    const double ax = first ? x[k0 - step] - 2.0 * x[k0] + x[k1] : 0.0;
+    const double ay = first ? y[k0 - step] - 2.0 * y[k0] + y[k1] : 0.0;
+    const double bx = second ? x[k0] - 2.0 * x[k1] + x[k1 + step] : 0.0;
+    const double by = second ? y[k0] - 2.0 * y[k1] + y[k1 + step] : 0.0;
+    if (!(first && second)) {
+        dx = first ? ax : bx;
+        dy = first ? ay : by;
+        return 2.0 * bend(dx, dy);
     }
-    if (at + 2 <= n) {
-        vx[count] = x[k0] - 2.0 * x[k1] + x[k1 + step];
-        vy[count] = y[k0] - 2.0 * y[k1] + y[k1 + step];
-        ++count;
-    }
-    if (count == 0) return -1.0;
-    for (int c = 0; c < count; ++c) {
-        bends[c] = std::fabs(tx * vy[c] - ty * vx[c]) / spacing / 8.0;
-        dx += vx[c] / count;
-        dy += vy[c] / count;
-    }
-    if (count == 1) return 2.0 * bends[0];
-    if (std::fabs(bends[0] - bends[1]) > 0.25 * kChordTol) return -1.0;
-    return 0.5 * (bends[0] + bends[1]);
+    dx = 0.5 * ax + 0.5 * bx;
+    dy = 0.5 * ay + 0.5 * by;
+    const double b0 = bend(ax, ay), b1 = bend(bx, by);
+    if (std::fabs(b0 - b1) > 0.25 * kChordTol) return -1.0;
+    return 0.5 * (b0 + b1);
 }
 
 // An edge estimated to bend up to this many times kChordTol is taken as the parabola the grid
-// implies (its points at a quarter, a half and three quarters: sixteen times straighter).
-constexpr double kParabolaBend = 16.0;
+// implies: up to kMidpointBend times through its midpoint alone (two chords, four times
+// straighter: within half of kChordTol, as a chord is held), beyond that through its points at
+// a quarter, a half and three quarters (sixteen times straighter). Most curved edges of a 1:1
+// lat-long → cube bend by one or two kChordTol: one midpoint saves two of their four walks.
+constexpr double kParabolaBend = 16.0, kMidpointBend = 2.0;
 
 // Decide every edge of a curved tile, once for the pixels on both sides: a chord where the
 // grid's estimate of its bend is within half of kChordTol (away from folds), the estimated
-// parabola where it is within kParabolaBend times kChordTol, else the polyline of
-// refine_segment (in the reference cell). ts.edges.refine records what was done (0: chord,
+// parabola (one or three points) where it is within kParabolaBend times kChordTol, else the
+// polyline of refine_segment (in the reference cell). ts.edges.refine records what was done (0: chord,
 // 1: refined, 2: parabola, -1: could not be refined in the reference cell, whose pixels are
 // then not direct); the general path takes the same polylines (SidePath).
 void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t cell) {
@@ -579,10 +582,11 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
             if (bend >= 0.0 && bend <= kParabolaBend * kChordTol) {
                 // P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second difference.
                 const size_t at = e.px.size();
-                e.px.resize(at + 3);
-                e.py.resize(at + 3);
-                for (int q = 0; q < 3; ++q) {
-                    const double t = 0.25 * double(q + 1);
+                const int points = bend <= kMidpointBend * kChordTol ? 1 : 3;
+                e.px.resize(at + size_t(points));
+                e.py.resize(at + size_t(points));
+                for (int q = 0; q < points; ++q) {
+                    const double t = points == 1 ? 0.5 : 0.25 * double(q + 1);
                     e.px[at + size_t(q)] = g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * dx;
                     e.py[at + size_t(q)] = g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * dy;
                 }
