@@ -56,6 +56,7 @@ from ..layouts.geometry import kernel_geometry, pixel_pitch
 from ..layouts.rotation import parse_rotation, rotation_matrix
 from ..limits import check_size
 from . import kernels
+from .holes import VALID_CHANNEL
 from .options import (
     FILTERS,
     MAX_SAMPLES,
@@ -66,6 +67,7 @@ from .options import (
     check_samples,
     choose_filter,
     default_size,
+    magnifies,
     output_channels,
     output_layout,
     rim_to_mirror_ball,
@@ -285,6 +287,10 @@ def _resample(
         filter,
     )
     src = np.ascontiguousarray(src)
+    # A magnifying conversion integrates the area filter's linear reconstruction (no texel
+    # blocks); next to a hole's or a partial view's texels (their V below 1) it keeps the box.
+    linear = filter == "area" and not same_grid and magnifies(envmap, to, size)
+    valid_channel = envmap.channels.index(VALID_CHANNEL) if VALID_CHANNEL in envmap.channels else -1
     # The chain averages blocks of level 0 with the kernel's own per-pixel weight sums.
     weights = np.zeros((height, width), np.float32) if mips else None
     if not _level0_unused(envmap, to, size, guard_px, irradiance, needs_coverage, mips):
@@ -293,7 +299,8 @@ def _resample(
             # A chain's ring takes the one sample count a point-sampled chain would.
             ring_samples = auto_samples(envmap, to, size) if mips else 1
             _area_with_guard(src, sgeo, to, size, guard_px, fill, n_samples, ring_samples, rot,
-                             out, None if direct_alpha else coverage, weights, direct_alpha)  # fmt: skip
+                             out, None if direct_alpha else coverage, weights, direct_alpha,
+                             linear, valid_channel)  # fmt: skip
         else:
             rip, rip_levels, rip_row_count = source_rips(
                 envmap, src, 1 if same_grid else n_samples, filter, to, size
@@ -301,7 +308,8 @@ def _resample(
             kernels.resample_rows(
                 src, rip, rip_levels, rip_row_count, sgeo, dgeo, 1.0, 1.0, n_samples or 0,
                 FILTERS[filter], rot, fill, out, None if direct_alpha else coverage, weights,
-                zeroed=True, coverage_channel=direct_alpha,
+                zeroed=True, coverage_channel=direct_alpha, linear=linear,
+                valid_channel=valid_channel,
             )  # fmt: skip
             del rip
     if same_grid:
@@ -348,7 +356,7 @@ def _resample(
 
 
 def _area_with_guard(src, sgeo, to, size, guard, fill, samples, ring_samples, rot, out,
-                     coverage, weights, coverage_channel):  # fmt: skip
+                     coverage, weights, coverage_channel, linear=False, valid_channel=-1):  # fmt: skip
     """Level 0 of the area filter with a guard ring (``guard`` pixels) or ``fill``, into ``out``
     (as :func:`kernels.resample_rows` fills it).
 
@@ -357,6 +365,7 @@ def _area_with_guard(src, sgeo, to, size, guard, fill, samples, ring_samples, ro
     that area-filtered map at the continued direction of the pixel's centre (``ring_samples``
     1; a mip chain's ring takes the sub-samples a point-sampled chain would, its block means
     needing one weight rule). So the ring costs the map no energy and adds none of its own.
+    ``linear``, ``valid_channel``: as :func:`kernels.resample_rows` takes them.
     """
     inner_geometry = kernel_geometry(to, size, 0)
     width, height = to.image_size(size, 0)
@@ -366,7 +375,8 @@ def _area_with_guard(src, sgeo, to, size, guard, fill, samples, ring_samples, ro
     no_rips = np.zeros((1, 1, src.shape[2]), np.float32)
     kernels.resample_rows(
         src, no_rips, 0, 0, sgeo, inner_geometry, 1.0, 1.0, samples or 1, kernels.AREA_FILTER,
-        rot, False, inner, inner_coverage, inner_weights, zeroed=True,
+        rot, False, inner, inner_coverage, inner_weights, zeroed=True, linear=linear,
+        valid_channel=valid_channel,
     )  # fmt: skip
     kernels.resample_rows(
         inner, no_rips, 0, 0, inner_geometry, kernel_geometry(to, size, guard), 1.0, 1.0,

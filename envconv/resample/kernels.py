@@ -202,6 +202,7 @@ def _geo(geometry):
 def resample_rows(
     src, rip, rip_levels, rip_rows, sgeometry, dgeometry, scale_x, scale_y, samples, filt, rot,
     fill, out, alpha=None, weights=None, zeroed=False, coverage_channel=False, threads=None,
+    linear=False, valid_channel=-1,
 ):  # fmt: skip
     """Fill ``out`` (H, W, C float32) with ``src`` resampled; see :mod:`envconv.resample.convert`.
 
@@ -216,7 +217,10 @@ def resample_rows(
     zeros (``np.zeros``), so pixels in a layout's empty cells are left as they are: their
     memory is never touched (half of a cross). ``coverage_channel``: ``out`` has one channel
     more than ``src`` and its last channel receives the coverage (an alpha channel resampled in
-    place, with no second array; ``alpha`` must then be None).
+    place, with no second array; ``alpha`` must then be None). ``linear`` (area filter only):
+    integrate the conservative piecewise-linear reconstruction (src/core/area_linear.h) instead
+    of the box, for a conversion that magnifies; ``valid_channel``: the index of the source's V
+    channel (holes, partial views), next to whose texels below 1 the box is kept, or -1.
     """
     args = (
         _c(src, np.float32), _c(rip, np.float32), int(rip_levels), int(rip_rows),
@@ -225,7 +229,8 @@ def resample_rows(
     )  # fmt: skip
     bands = (out.shape[0] + TILE - 1) // TILE
     _run_watched(lambda progress: _core.resample(*args, progress, bool(zeroed),
-                                                 bool(coverage_channel)), bands)  # fmt: skip
+                                                 bool(coverage_channel), bool(linear),
+                                                 int(valid_channel)), bands)  # fmt: skip
 
 
 def rip_level_count(width: int) -> int:

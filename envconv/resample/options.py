@@ -20,7 +20,7 @@ from ..layouts.geometry import horizon_pitch
 from ..limits import check_size as bounded_size
 from . import kernels
 
-__all__ = ["FILTERS", "choose_filter", "rim_to_mirror_ball", "RIM_SOURCES", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
+__all__ = ["FILTERS", "choose_filter", "magnifies", "LINEAR_MAGNIFICATION", "rim_to_mirror_ball", "RIM_SOURCES", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
            "check_samples", "check_guard", "check_mips", "check_conventions", "check_roughness",
            "output_channels", "check_size", "check_output", "output_layout"]  # fmt: skip
 
@@ -32,6 +32,10 @@ FILTERS = {
     "nearest": kernels.FILTER_NEAREST,
 }
 MAX_SAMPLES = 32
+#: The area filter integrates its linear reconstruction (src/core/area_linear.h) instead of the
+#: box when the output's mean pixel solid angle is below the source's mean texel solid angle
+#: divided by this (see :func:`magnifies` and docs/native-core.md for the measurements).
+LINEAR_MAGNIFICATION = 1.5
 #: How a GGX chain's levels get their roughness (:func:`envconv.resample.ibl.roughness_levels`).
 ROUGHNESS_MAPPINGS = ("gltf", "filament", "unreal")
 
@@ -157,6 +161,27 @@ def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | Non
 #: mirror ball, whose own rim is −Z too (a one-texel sun there moves by up to 1 %): such a
 #: conversion goes through an exact lat-long 1.5 times finer than the source at the horizon.
 RIM_SOURCES = ("sphere", "angular")
+
+
+def _mean_pixel_solid_angle(layout: Layout, size: int, guard: int = 0) -> float:
+    """Mean solid angle (sr) of a valid pixel of ``layout`` at size N = ``size``: what it
+    covers (4π; a partial view's own, from its pixels' solid angles) over its valid pixels."""
+    count = layout.n_faces * layout.content_width(size) * size * (math.pi / 4 if layout.disk else 1)
+    if not layout.partial:
+        return 4 * math.pi / count
+    from ..layouts.geometry import pixel_solid_angles
+
+    return float(pixel_solid_angles(layout, size, guard, samples=2).sum()) / count
+
+
+def magnifies(source: EnvMap, to: Layout | str, size: int) -> bool:
+    """True when a conversion of ``source`` to ``to`` at size ``size`` magnifies: the output's
+    mean pixel solid angle is below the source's mean texel solid angle divided by
+    :data:`LINEAR_MAGNIFICATION`. The area filter then integrates its conservative
+    piecewise-linear reconstruction rather than the box, which would show texel blocks."""
+    to = get_layout(to)
+    texel = _mean_pixel_solid_angle(source.layout, source.size, source.guard)
+    return _mean_pixel_solid_angle(to, size) * LINEAR_MAGNIFICATION < texel
 
 
 def rim_to_mirror_ball(envmap: EnvMap, to: Layout, filter: str) -> bool:

@@ -37,6 +37,7 @@ struct AreaJob {
     const Singular& sing;
     const ResampleOutput& out;
     int samples;  // sub-pixels per edge, each integrated exactly
+    const LinearSlopes* linear = nullptr;  // the linear reconstruction's slopes, or the box
 };
 
 // The exact coverage of pixel (i, j) when an alpha plane is wanted (else 0, unused).
@@ -180,6 +181,82 @@ DirectPixel direct_pixel_for(bool rows, int64_t nch) {
         return nch == 3 ? direct_pixel<true, 3> : nch == 4 ? direct_pixel<true, 4> : direct_pixel<true, 0>;
     }
     return nch == 3 ? direct_pixel<false, 3> : nch == 4 ? direct_pixel<false, 4> : direct_pixel<false, 0>;
+}
+
+// DirectSink for the linear reconstruction (area_linear.h): the same solid angles, and each
+// piece's colour also takes the slope terms Dx c ax + Dy c ay of its texel (every texel of a
+// direct footprint is its cell's own), so every piece needs both moments.
+template <bool kRows, int NCH>
+struct LinearDirectSink {
+    static constexpr bool kMomentX = true;
+    const SourceModel& model;
+    const LinearSlopes& slopes;
+    int64_t cell, row0, period;
+    double sign;
+    PixelSums& sums;
+    DensityCache& cache;
+    double m = 0.0, g = 0.0;
+    bool flat(int64_t, int64_t) const { return false; }
+    void row(int64_t iy) {
+        if (kRows) {
+            m = sign * model.row_m[size_t(iy - row0)];
+            g = sign * model.row_g[size_t(iy - row0)];
+        }
+    }
+    void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
+        double w;
+        if (kRows) {
+            w = m * area + g * dy;
+        } else {
+            TexelDensity t = cache.get(model, ix, iy);
+            w = sign * (t.gx == kKinked ? model.weight(cell, ix, iy, area, dx, dy)
+                                        : t.m * area + t.gx * dx + t.gy * dy);
+        }
+        if (period) {
+            while (ix < 0) ix += period;
+            while (ix >= period) ix -= period;
+        }
+        const int64_t nch = NCH ? NCH : sums.nch, at = (iy * model.image.width + ix) * nch;
+        const float* v = model.image.data + at;
+        const float *sx = slopes.x.data() + at, *sy = slopes.y.data() + at;
+        const double lx = sign * dx, ly = sign * dy;
+        for (int64_t c = 0; c < nch; ++c)
+            sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]);
+        sums.weight += w;
+    }
+};
+
+template <bool kRows, int NCH>
+void direct_pixel_linear(const SourceModel& model, const LinearSlopes& slopes, int64_t cell,
+                         int64_t row0, int64_t period, const double* xs, const double* ys, int n,
+                         PixelSums& sums, GreenScratch& green, DensityCache& cache) {
+    double area, mx, my;
+    polygon_moments(xs, ys, n, area, mx, my);
+    LinearDirectSink<kRows, NCH> sink{model, slopes, cell, row0, period, area > 0.0 ? 1.0 : -1.0,
+                                      sums, cache};
+    if (kRows || model.g.family != kOctahedral) {
+        integrate_any(xs, ys, n, sink, green);
+        return;
+    }
+    thread_local std::vector<std::vector<double>> scratch;
+    split_at_kinks(model.g, cell, xs, ys, n, scratch, [&](const double* px, const double* py, int m) {
+        integrate_any(px, py, m, sink, green);
+    });
+}
+
+using LinearPixel = void (*)(const SourceModel&, const LinearSlopes&, int64_t, int64_t, int64_t,
+                             const double*, const double*, int, PixelSums&, GreenScratch&,
+                             DensityCache&);
+
+LinearPixel direct_pixel_linear_for(bool rows, int64_t nch) {
+    if (rows) {
+        return nch == 3   ? direct_pixel_linear<true, 3>
+               : nch == 4 ? direct_pixel_linear<true, 4>
+                          : direct_pixel_linear<true, 0>;
+    }
+    return nch == 3   ? direct_pixel_linear<false, 3>
+           : nch == 4 ? direct_pixel_linear<false, 4>
+                      : direct_pixel_linear<false, 0>;
 }
 
 // True when the box [xmin, xmax] x [ymin, ymax] of tennisball band `cell` (its continued
@@ -708,6 +785,10 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     const int64_t row0 = (grid.ref_cell / s.columns) * s.cell_height();
     const bool rows = !job.model.row_m.empty();
     const DirectPixel direct = direct_pixel_for(rows, sums.nch);
+    // The linear reconstruction integrates every direct pixel as a polygon (a magnified pixel
+    // spans few texels): the prefix tables and edge walks hold the box only.
+    const LinearPixel linear = job.linear ? direct_pixel_linear_for(rows, sums.nch) : nullptr;
+    const bool tables = rows && !linear;
     ts.direct.assign(size_t(grid.w * grid.h), 0);
     const int64_t st = grid.w + 1;
     const bool all_direct = straight && whole_tile_direct(s, grid);
@@ -746,12 +827,12 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
     while (band_j0 < grid.h) {
-        bool grad = false, whole = rows && tile_table(job, grid, ts, band_j0, grid.h, grad);
+        bool grad = false, whole = tables && tile_table(job, grid, ts, band_j0, grid.h, grad);
         int band_j1 = grid.h;
-        if (!whole && rows) {
+        if (!whole && tables) {
             band_j1 = band_j0 + 1;
             whole = tile_table(job, grid, ts, band_j0, band_j1, grad);
-        } else if (!rows) {
+        } else if (!tables) {
             band_j1 = grid.h;
         }
         if (whole) {
@@ -772,8 +853,13 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                         std::fill(sums.acc, sums.acc + sums.nch, 0.0);
                         sums.weight = 0.0;
                         pixel_polygon(grid, ts, i, j, sp.xs, sp.ys);
-                        direct(job.model, grid.ref_cell, row0, period, sp.xs.data(), sp.ys.data(),
-                               int(sp.xs.size()), sums, sp.green, ts.density);
+                        if (linear) {
+                            linear(job.model, *job.linear, grid.ref_cell, row0, period, sp.xs.data(),
+                                   sp.ys.data(), int(sp.xs.size()), sums, sp.green, ts.density);
+                        } else {
+                            direct(job.model, grid.ref_cell, row0, period, sp.xs.data(),
+                                   sp.ys.data(), int(sp.xs.size()), sums, sp.green, ts.density);
+                        }
                     }
                 } else {
                     std::fill(sums.acc, sums.acc + sums.nch, 0.0);
@@ -893,7 +979,8 @@ void sub_pixel_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, Pi
     sub.row0 = j0 * n;
     SlowPath fine_sp(fine, sp.model, sp.sing);
     fine_sp.sums = &sums;
-    AreaJob fine_job{fine, job.model, job.sing, sub, 1};
+    fine_sp.linear = sp.linear;
+    AreaJob fine_job{fine, job.model, job.sing, sub, 1, job.linear};
     area_rows(fine_job, j0 * n, j1 * n, fine_sp, sums, grid, ts);
     std::vector<double> acc(static_cast<size_t>(nch));  // any number of channels (a fixed 64 overran)
     for (int64_t j = j0; j < j1; ++j) {
@@ -918,13 +1005,16 @@ void sub_pixel_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, Pi
 bool set_area_direct(bool allowed) { return direct_allowed.exchange(allowed); }
 
 void resample_area(const Image& src, const Conversion& cv, int samples, const ResampleOutput& out,
-                   int threads, int64_t* progress) {
+                   int threads, int64_t* progress, bool linear, int valid_channel) {
     SourceModel model(src, cv.src);
     Singular sing = source_singular(cv);
-    AreaJob job{cv, model, sing, out, samples};
+    LinearSlopes slopes;
+    if (linear) build_linear_slopes(model, valid_channel, threads, slopes);
+    AreaJob job{cv, model, sing, out, samples, linear ? &slopes : nullptr};
     int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;
     parallel_for(bands, threads, [&](int64_t band) {
         SlowPath sp(cv, model, sing);
+        sp.linear = job.linear;
         std::vector<double> acc(size_t(out.channels));
         PixelSums sums{acc.data(), out.channels, 0.0};
         sp.sums = &sums;

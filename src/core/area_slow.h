@@ -18,6 +18,7 @@
 #include <cmath>
 #include <vector>
 
+#include "area_linear.h"
 #include "area_map.h"
 #include "green.h"
 
@@ -79,6 +80,9 @@ struct SlowPath {
     // from the uncovered ones: a sun on a fisheye's rim got up to 2 % too much at 4:1).
     double out_weight = 0.0;
     bool uncovered = false;
+    // The linear reconstruction's slopes (area_linear.h) when the conversion magnifies, else
+    // none (the box).
+    const LinearSlopes* linear = nullptr;
 
     SlowPath(const Conversion& cv_, const SourceModel& model_, const Singular& sing_)
         : cv(cv_), model(model_), sing(sing_) {}
@@ -103,6 +107,46 @@ struct TexelSink {
     }
 };
 
+// TexelSink for the linear reconstruction (area_linear.h): each piece's colour also takes the
+// slope terms Dx c ax + Dy c ay of the texel read (turned into its grid where it is read in
+// another's place; none where the grids do not map by a reflection or quarter turn).
+struct LinearTexelSink {
+    static constexpr bool kMomentX = true;
+    const SourceModel& model;
+    const LinearSlopes& slopes;
+    int64_t cell;
+    double sign;
+    PixelSums& sums;
+    bool flat(int64_t, int64_t) const { return false; }
+    void row(int64_t) {}
+    // True when area_texel reads texel (ix, iy) of the cell's continued grid as itself.
+    bool own(int64_t ix, int64_t iy) const {
+        const Geometry& g = model.g;
+        if (g.family == kLatlong && g.guard == 0 && iy >= 0 && iy < g.n) return true;
+        return area_readable(g, cell, ix, iy);
+    }
+    void texel(int64_t ix, int64_t iy, double area, double dx, double dy) {
+        double w = sign * model.weight(cell, ix, iy, area, dx, dy);
+        if (w == 0.0 && dx == 0.0 && dy == 0.0) return;
+        const float* v = area_texel(model.image, model.g, cell, ix, iy);
+        const int64_t at = v - model.image.data;
+        sums.weight += w;
+        int turn[4] = {1, 0, 0, 1};  // this grid's x and y steps in the read texel's grid
+        if (!own(ix, iy) &&
+            !grid_turn(model.g, model.image.width, cell, ix, iy, at / model.image.channels, turn)) {
+            for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
+            return;
+        }
+        const float *sx = slopes.x.data() + at, *sy = slopes.y.data() + at;
+        const double lx = sign * dx, ly = sign * dy;
+        for (int64_t c = 0; c < sums.nch; ++c) {
+            const double ax = double(sx[c]), ay = double(sy[c]);
+            sums.acc[c] += w * double(v[c]) + lx * (turn[0] * ax + turn[1] * ay) +
+                           ly * (turn[2] * ax + turn[3] * ay);
+        }
+    }
+};
+
 // Integrate the closed polygon (sp.xs, sp.ys) of source cell `cell` into the pixel's sums.
 inline void add_footprint(SlowPath& sp, int64_t cell) {
     int n = int(sp.xs.size());
@@ -110,6 +154,14 @@ inline void add_footprint(SlowPath& sp, int64_t cell) {
     double area, mx, my;
     polygon_moments(sp.xs.data(), sp.ys.data(), n, area, mx, my);
     if (!(std::fabs(area) > 0.0)) return;
+    if (sp.linear) {
+        LinearTexelSink sink{sp.model, *sp.linear, cell, area > 0.0 ? 1.0 : -1.0, *sp.sums};
+        split_at_kinks(sp.model.g, cell, sp.xs.data(), sp.ys.data(), n, sp.kink_scratch,
+                       [&](const double* xs, const double* ys, int m) {
+                           integrate_any(xs, ys, m, sink, sp.green);
+                       });
+        return;
+    }
     TexelSink sink{sp.model, cell, area > 0.0 ? 1.0 : -1.0, *sp.sums};
     split_at_kinks(sp.model.g, cell, sp.xs.data(), sp.ys.data(), n, sp.kink_scratch,
                    [&](const double* xs, const double* ys, int m) {

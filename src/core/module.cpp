@@ -78,7 +78,8 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
               double scale_x, double scale_y, int samples, int filter,
               Array<const double, nb::shape<3, 3>> rot, bool fill, Array<float, nb::ndim<3>> out,
               Array<float, nb::ndim<2>> alpha, Array<float, nb::ndim<2>> weights, int threads,
-              Array<int64_t, nb::shape<1>> progress, bool zeroed, bool coverage_channel) {
+              Array<int64_t, nb::shape<1>> progress, bool zeroed, bool coverage_channel,
+              bool linear, int valid_channel) {
     envconv::Conversion cv;
     cv.src = make_geometry(sgeo, s_cell_face, s_cell_turns, s_face_cell);
     cv.dst = make_geometry(dgeo, d_cell_face, d_cell_turns, d_face_cell);
@@ -95,6 +96,10 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
         throw std::invalid_argument("source and output channel counts differ");
     if (filter < envconv::kNearest || filter > envconv::kArea)
         throw std::invalid_argument("unknown filter code");
+    if (linear && filter != envconv::kArea)
+        throw std::invalid_argument("the linear reconstruction is the area filter's");
+    if (valid_channel >= int64_t(src.shape(2)))
+        throw std::invalid_argument("valid_channel is past the source's channels");
     bool has_alpha = alpha.is_valid(), has_weights = weights.is_valid();
     if (coverage_channel && (has_alpha || nch < 1))
         throw std::invalid_argument("coverage goes to the output's last channel or to alpha");
@@ -116,7 +121,7 @@ void resample(Array<const float, nb::ndim<3>> src, Array<const float, nb::ndim<3
     int64_t* counter = progress.is_valid() ? progress.data() : nullptr;
     nb::gil_scoped_release release;
     if (filter == envconv::kArea) {
-        envconv::resample_area(image, cv, samples, o, threads, counter);
+        envconv::resample_area(image, cv, samples, o, threads, counter, linear, valid_channel);
         return;
     }
     envconv::resample(image, rips, cv, samples, filter, o, threads, counter);
@@ -360,7 +365,8 @@ NB_MODULE(_core, m) {
           "s_cell_face"_a, "s_cell_turns"_a, "s_face_cell"_a, "dgeo"_a, "d_cell_face"_a,
           "d_cell_turns"_a, "d_face_cell"_a, "scale_x"_a, "scale_y"_a, "samples"_a, "filter"_a,
           "rot"_a, "fill"_a, "out"_a, "alpha"_a.none(), "weights"_a.none(), "threads"_a,
-          "progress"_a.none() = nb::none(), "zeroed"_a = false, "coverage_channel"_a = false);
+          "progress"_a.none() = nb::none(), "zeroed"_a = false, "coverage_channel"_a = false,
+          "linear"_a = false, "valid_channel"_a = -1);
     m.def("fill_rips", &fill_rips, "src"_a, "levels"_a, "rows"_a, "out"_a, "threads"_a);
     m.def("reduce_blocks", &reduce_blocks, "src"_a, "wsrc"_a, "asrc"_a.none(), "bx"_a, "by"_a,
           "out"_a, "wout"_a, "aout"_a.none(), "threads"_a);

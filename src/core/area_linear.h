@@ -1,0 +1,201 @@
+// The area filter's linear reconstruction, for conversions that magnify (envconv/resample/
+// convert.py decides; the box of area.cpp everywhere else, its code untouched).
+//
+// Inside texel t, centre (cx, cy) in level-0 image pixels, the source is
+// f = s_t + ax (x - cx) + ay (y - cy), the slopes (colour per texel) the central differences of
+// its four neighbours, scaled down so that f stays within the range of the texel and those
+// neighbours (conservative: no overshoot, no ringing next to a sun). A piece of t with area A
+// and first moments Dx, Dy about the centre (texels^2, texels^3; green.h) holds the solid
+// angle w = m A + gx Dx + gy Dy (the density model of area_source.h) and the colour
+// s w + c (ax Dx + ay Dy), c the model's least density over the texel (slope_weight, sr per
+// texel^2; c <= the density keeps the weighted value within the range above). The slope terms
+// integrate to 0 over a whole texel, so every texel still hands out exactly s_t times its
+// solid angle: a one-texel sun keeps its energy, a constant map stays constant.
+//
+// A neighbour past a cell's edge is the texel across the seam (a cube face's neighbour face, a
+// folded square's fold, a lat-long's row past the pole). A texel keeps the box (slopes 0)
+// wherever its stencil is not wholly data: a texel or neighbour cut by a disk's rim or past it,
+// in a partial view's pad, whose valid channel V (holes, partial-view pads) is below 1 or whose
+// value is not finite, and a texel that a fold of an octahedral square's density crosses. No
+// hole value therefore leaks into held texels. Where the general path reads a texel in
+// another's place (a folded square's continued grid past its edge), the slopes are turned into
+// that grid when the two grids map onto each other by a reflection or quarter turn (exact), else
+// that read takes none: the general path cuts footprints at cube seams, so such reads are
+// slivers within its chord tolerance of the seam.
+//
+// The slopes are stored premultiplied by c, two float planes at the image's offsets: twice the
+// source's size, counted by envconv.resample.convert.memory_needed (the source of a magnifying
+// conversion is the smaller image).
+#pragma once
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+#include <vector>
+
+#include "area_source.h"
+#include "parallel.h"
+
+namespace envconv {
+
+// c ax and c ay of every texel (sr x colour per texel^3), at the image's offsets.
+struct LinearSlopes {
+    std::vector<float> x, y;
+};
+
+// The density the slope terms are weighted by: the model's least value over the texel (0 if
+// it goes negative). Any constant integrates the slopes to 0 over the whole texel.
+inline double slope_weight(double m, double gx, double gy) {
+    return std::max(0.0, m - 0.5 * (std::fabs(gx) + std::fabs(gy)));
+}
+
+namespace linear_detail {
+
+// A limited slope is scaled a few float roundings short of its bound, so that the corners stay
+// within range as they are computed, not only in exact arithmetic.
+constexpr float kShrink = 1.0f - 8.0f * FLT_EPSILON;
+
+// The limited slopes of one channel: s the texel, (l, r) its neighbours along x, (t, b) along y.
+inline void limit(float s, float l, float r, float t, float b, float& ax, float& ay) {
+    ax = 0.5f * (r - l);
+    ay = 0.5f * (b - t);
+    float hi = std::max(std::max(std::max(l, r), std::max(t, b)), s);
+    float lo = std::min(std::min(std::min(l, r), std::min(t, b)), s);
+    float room = std::min(hi - s, s - lo), d = 0.5f * (std::fabs(ax) + std::fabs(ay));
+    float k = room < d ? room / d * kShrink : 1.0f;
+    ax *= k;
+    ay *= k;
+}
+
+// True when texel (ix, iy) of `cell` is wholly data for a stencil: in the cell's valid region
+// (its columns modulo the width for a lat-long), for a disk wholly inside the disk, finite in
+// every channel and, with a valid channel, V = 1. ix is wrapped in place.
+inline bool whole_texel(const Image& img, const Geometry& g, int64_t cell, int64_t& ix,
+                        int64_t iy, int valid_channel, bool cut = false) {
+    const int64_t cw = g.cell_width(), ch = g.cell_height();
+    const int64_t x0 = (cell % g.columns) * cw + g.guard, y0 = (cell / g.columns) * ch + g.guard;
+    if (iy < y0 || iy >= y0 + g.n) return false;
+    if (g.family == kLatlong && g.guard == 0) {
+        const int64_t w = 2 * g.n;
+        ix = ((ix % w) + w) % w;
+    } else if (ix < x0 || ix >= x0 + g.nx) {
+        return false;
+    }
+    if (g.disk() && !(cut && area_readable(g, cell, ix, iy))) {
+        const double c = 0.5 * double(g.n);
+        const double dx = std::max(std::fabs(double(ix - x0) - c), std::fabs(double(ix + 1 - x0) - c));
+        const double dy = std::max(std::fabs(double(iy - y0) - c), std::fabs(double(iy + 1 - y0) - c));
+        if (dx * dx + dy * dy > c * c) return false;
+    }
+    const float* v = img.texel(iy, ix);
+    for (int64_t k = 0; k < img.channels; ++k)
+        if (!std::isfinite(v[k])) return false;
+    return valid_channel < 0 || v[valid_channel] >= 1.0f;
+}
+
+// Neighbour (jx, jy) of a texel of `cell`, or null where the stencil may not read it: the
+// texel itself where it is wholly data; past a cell's edge (a cube face's, a folded square's, a
+// tennisball band's, a lat-long's pole rows) the texel across the seam (remap_tap: the one that
+// holds its continued centre's direction) if that is wholly data; none inside the cell (a hole,
+// V < 1, a value not finite), past a disk's rim or around a partial view.
+inline const float* neighbour(const Image& img, const Geometry& g, int64_t cell, int64_t jx,
+                              int64_t jy, int valid_channel) {
+    int64_t x = jx;
+    if (whole_texel(img, g, cell, x, jy, valid_channel, true)) return img.texel(jy, x);
+    if (g.disk() || g.param[kReach] > 0.0) return nullptr;
+    const int64_t x0 = (cell % g.columns) * g.cell_width() + g.guard;
+    const int64_t y0 = (cell / g.columns) * g.cell_height() + g.guard;
+    const bool wraps = g.family == kLatlong && g.guard == 0;
+    if (jy >= y0 && jy < y0 + g.n && (wraps || (jx >= x0 && jx < x0 + g.nx))) return nullptr;
+    int64_t kx, ky;
+    remap_tap(g, cell, jx, jy, kx, ky);
+    const int64_t other = (ky / g.cell_height()) * g.columns + kx / g.cell_width();
+    if (g.cell_face[other] < 0 || !whole_texel(img, g, other, kx, ky, valid_channel)) return nullptr;
+    return img.texel(ky, kx);
+}
+
+// The slopes of texel (ix, iy) of `cell` into x, y (left 0 where it keeps the box).
+inline void texel(const SourceModel& model, int64_t cell, int64_t ix, int64_t iy,
+                  int valid_channel, float* x, float* y) {
+    const Image& img = model.image;
+    const Geometry& g = model.g;
+    const int64_t dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
+    const float* nb[4];
+    int64_t sx = ix;
+    if (!whole_texel(img, g, cell, sx, iy, valid_channel)) return;
+    for (int k = 0; k < 4; ++k) {
+        nb[k] = neighbour(img, g, cell, ix + dx[k], iy + dy[k], valid_channel);
+        if (!nb[k]) return;
+    }
+    TexelDensity t = model.texel(cell, ix, iy);
+    if (t.gx == kKinked) return;
+    const double c = slope_weight(t.m, t.gx, t.gy);
+    const float* s = img.texel(iy, ix);
+    const int64_t at = (iy * img.width + ix) * img.channels;
+    for (int64_t k = 0; k < img.channels; ++k) {
+        float ax, ay;
+        limit(s[k], nb[0][k], nb[1][k], nb[2][k], nb[3][k], ax, ay);
+        const float cx = float(c * double(ax)), cy = float(c * double(ay));
+        const bool ok = std::isfinite(cx) && std::isfinite(cy);
+        x[at + k] = ok ? cx : 0.0f;
+        y[at + k] = ok ? cy : 0.0f;
+    }
+}
+
+}  // namespace linear_detail
+
+// Fill `out` with the slopes of every texel of the model's image (0 where it keeps the box),
+// rows in parallel; valid_channel: the index of the V channel, or -1.
+inline void build_linear_slopes(const SourceModel& model, int valid_channel, int threads,
+                                LinearSlopes& out) {
+    const Image& img = model.image;
+    const Geometry& g = model.g;
+    const size_t size = size_t(img.height * img.width * img.channels);
+    out.x.assign(size, 0.0f);
+    out.y.assign(size, 0.0f);
+    // A partial view's pad holds colour x V: without V no texel can be told wholly data.
+    if (g.param[kReach] > 0.0 && valid_channel < 0) return;
+    constexpr int64_t kRows = 16;
+    const int64_t cw = g.cell_width(), ch = g.cell_height();
+    parallel_for((img.height + kRows - 1) / kRows, threads, [&](int64_t task) {
+        const int64_t end = std::min(img.height, (task + 1) * kRows);
+        for (int64_t iy = task * kRows; iy < end; ++iy) {
+            for (int64_t ix = 0; ix < img.width; ++ix) {
+                const int64_t cell = (iy / ch) * g.columns + ix / cw;
+                if (g.cell_face[cell] < 0) continue;
+                linear_detail::texel(model, cell, ix, iy, valid_channel, out.x.data(), out.y.data());
+            }
+        }
+    });
+}
+
+// For texel (ix, iy) of `cell`'s continued grid, read in another's place (the texel at
+// `offset` texels into the image): true when the two grids map onto each other by a
+// reflection or a quarter turn around it (the folds of the octahedral and equal-area squares),
+// turn then the read texel's grid steps of a step in x and in y; false elsewhere.
+inline bool grid_turn(const Geometry& g, int64_t width, int64_t cell, int64_t ix, int64_t iy,
+                      int64_t offset, int* turn) {
+    // The centre and a quarter texel along x and y: inside the texel, clear of the fold.
+    const double px[3] = {double(ix) + 0.5, double(ix) + 0.75, double(ix) + 0.5};
+    const double py[3] = {double(iy) + 0.5, double(iy) + 0.5, double(iy) + 0.75};
+    ImagePoint q[3];
+    for (int k = 0; k < 3; ++k) {
+        double a, b;
+        cell_local(g, cell, px[k], py[k], a, b);
+        Vec3 d = face_to_dir(g, g.cell_face[cell], a, b);
+        FacePoint f = dir_to_face(g, d.x, d.y, d.z);
+        q[k] = face_to_image(g, f.face, f.a, f.b);
+        if (q[k].cell != q[0].cell) return false;
+    }
+    if (floor_index(q[0].x) != offset % width || floor_index(q[0].y) != offset / width) return false;
+    const double j[4] = {4.0 * (q[1].x - q[0].x), 4.0 * (q[1].y - q[0].y), 4.0 * (q[2].x - q[0].x),
+                         4.0 * (q[2].y - q[0].y)};
+    for (int k = 0; k < 4; ++k) {
+        turn[k] = int(std::lround(j[k]));
+        if (std::fabs(j[k] - turn[k]) > 1e-6 || std::abs(turn[k]) > 1) return false;
+    }
+    return std::abs(turn[0]) + std::abs(turn[1]) == 1 && std::abs(turn[2]) + std::abs(turn[3]) == 1;
+}
+
+}  // namespace envconv
