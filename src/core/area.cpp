@@ -12,6 +12,7 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <memory>
 #include <vector>
 
 #include "area.h"
@@ -37,7 +38,8 @@ struct AreaJob {
     const Singular& sing;
     const ResampleOutput& out;
     int samples;  // sub-pixels per edge, each integrated exactly
-    const LinearSlopes* linear = nullptr;  // the linear reconstruction's slopes, or the box
+    bool linear = false;     // the linear reconstruction (area_linear.h), else the box
+    int valid_channel = -1;  // the source's V channel, or -1
 };
 
 // The exact coverage of pixel (i, j) when an alpha plane is wanted (else 0, unused).
@@ -190,7 +192,7 @@ template <bool kRows, int NCH>
 struct LinearDirectSink {
     static constexpr bool kMomentX = true;
     const SourceModel& model;
-    const LinearSlopes& slopes;
+    SlopeCache& slopes;
     int64_t cell, row0, period;
     double sign;
     PixelSums& sums;
@@ -218,7 +220,7 @@ struct LinearDirectSink {
         }
         const int64_t nch = NCH ? NCH : sums.nch, at = (iy * model.image.width + ix) * nch;
         const float* v = model.image.data + at;
-        const float *sx = slopes.x.data() + at, *sy = slopes.y.data() + at;
+        const float *sx = slopes.get(ix, iy), *sy = sx + nch;
         const double lx = sign * dx, ly = sign * dy;
         for (int64_t c = 0; c < nch; ++c)
             sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]);
@@ -227,7 +229,7 @@ struct LinearDirectSink {
 };
 
 template <bool kRows, int NCH>
-void direct_pixel_linear(const SourceModel& model, const LinearSlopes& slopes, int64_t cell,
+void direct_pixel_linear(const SourceModel& model, SlopeCache& slopes, int64_t cell,
                          int64_t row0, int64_t period, const double* xs, const double* ys, int n,
                          PixelSums& sums, GreenScratch& green, DensityCache& cache) {
     double area, mx, my;
@@ -244,7 +246,7 @@ void direct_pixel_linear(const SourceModel& model, const LinearSlopes& slopes, i
     });
 }
 
-using LinearPixel = void (*)(const SourceModel&, const LinearSlopes&, int64_t, int64_t, int64_t,
+using LinearPixel = void (*)(const SourceModel&, SlopeCache&, int64_t, int64_t, int64_t,
                              const double*, const double*, int, PixelSums&, GreenScratch&,
                              DensityCache&);
 
@@ -854,7 +856,7 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                         sums.weight = 0.0;
                         pixel_polygon(grid, ts, i, j, sp.xs, sp.ys);
                         if (linear) {
-                            linear(job.model, *job.linear, grid.ref_cell, row0, period, sp.xs.data(),
+                            linear(job.model, *sp.linear, grid.ref_cell, row0, period, sp.xs.data(),
                                    sp.ys.data(), int(sp.xs.size()), sums, sp.green, ts.density);
                         } else {
                             direct(job.model, grid.ref_cell, row0, period, sp.xs.data(),
@@ -980,7 +982,7 @@ void sub_pixel_rows(const AreaJob& job, int64_t j0, int64_t j1, SlowPath& sp, Pi
     SlowPath fine_sp(fine, sp.model, sp.sing);
     fine_sp.sums = &sums;
     fine_sp.linear = sp.linear;
-    AreaJob fine_job{fine, job.model, job.sing, sub, 1, job.linear};
+    AreaJob fine_job{fine, job.model, job.sing, sub, 1, job.linear, job.valid_channel};
     area_rows(fine_job, j0 * n, j1 * n, fine_sp, sums, grid, ts);
     std::vector<double> acc(static_cast<size_t>(nch));  // any number of channels (a fixed 64 overran)
     for (int64_t j = j0; j < j1; ++j) {
@@ -1008,13 +1010,13 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
                    int threads, int64_t* progress, bool linear, int valid_channel) {
     SourceModel model(src, cv.src);
     Singular sing = source_singular(cv);
-    LinearSlopes slopes;
-    if (linear) build_linear_slopes(model, valid_channel, threads, slopes);
-    AreaJob job{cv, model, sing, out, samples, linear ? &slopes : nullptr};
+    AreaJob job{cv, model, sing, out, samples, linear, valid_channel};
     int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;
     parallel_for(bands, threads, [&](int64_t band) {
         SlowPath sp(cv, model, sing);
-        sp.linear = job.linear;
+        std::unique_ptr<SlopeCache> slopes;
+        if (linear) slopes = std::make_unique<SlopeCache>(model, valid_channel);
+        sp.linear = slopes.get();
         std::vector<double> acc(size_t(out.channels));
         PixelSums sums{acc.data(), out.channels, 0.0};
         sp.sums = &sums;

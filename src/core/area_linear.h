@@ -23,9 +23,7 @@
 // that read takes none: the general path cuts footprints at cube seams, so such reads are
 // slivers within its chord tolerance of the seam.
 //
-// The slopes are stored premultiplied by c, two float planes at the image's offsets: twice the
-// source's size, counted by envconv.resample.convert.memory_needed (the source of a magnifying
-// conversion is the smaller image).
+// The slopes, premultiplied by c, are made per texel on first use (SlopeCache), not as planes.
 #pragma once
 
 #include <algorithm>
@@ -35,14 +33,8 @@
 #include <vector>
 
 #include "area_source.h"
-#include "parallel.h"
 
 namespace envconv {
-
-// c ax and c ay of every texel (sr x colour per texel^3), at the image's offsets.
-struct LinearSlopes {
-    std::vector<float> x, y;
-};
 
 // The density the slope terms are weighted by: the model's least value over the texel (0 if
 // it goes negative). Any constant integrates the slopes to 0 over the whole texel.
@@ -115,7 +107,8 @@ inline const float* neighbour(const Image& img, const Geometry& g, int64_t cell,
     return img.texel(ky, kx);
 }
 
-// The slopes of texel (ix, iy) of `cell` into x, y (left 0 where it keeps the box).
+// The slopes of texel (ix, iy) of `cell`, times c, into x, y (nch each; left as they are, 0,
+// where it keeps the box).
 inline void texel(const SourceModel& model, int64_t cell, int64_t ix, int64_t iy,
                   int valid_channel, float* x, float* y) {
     const Image& img = model.image;
@@ -132,43 +125,64 @@ inline void texel(const SourceModel& model, int64_t cell, int64_t ix, int64_t iy
     if (t.gx == kKinked) return;
     const double c = slope_weight(t.m, t.gx, t.gy);
     const float* s = img.texel(iy, ix);
-    const int64_t at = (iy * img.width + ix) * img.channels;
     for (int64_t k = 0; k < img.channels; ++k) {
         float ax, ay;
         limit(s[k], nb[0][k], nb[1][k], nb[2][k], nb[3][k], ax, ay);
         const float cx = float(c * double(ax)), cy = float(c * double(ay));
         const bool ok = std::isfinite(cx) && std::isfinite(cy);
-        x[at + k] = ok ? cx : 0.0f;
-        y[at + k] = ok ? cy : 0.0f;
+        x[k] = ok ? cx : 0.0f;
+        y[k] = ok ? cy : 0.0f;
     }
 }
 
 }  // namespace linear_detail
 
-// Fill `out` with the slopes of every texel of the model's image (0 where it keeps the box),
-// rows in parallel; valid_channel: the index of the V channel, or -1.
-inline void build_linear_slopes(const SourceModel& model, int valid_channel, int threads,
-                                LinearSlopes& out) {
-    const Image& img = model.image;
-    const Geometry& g = model.g;
-    const size_t size = size_t(img.height * img.width * img.channels);
-    out.x.assign(size, 0.0f);
-    out.y.assign(size, 0.0f);
-    // A partial view's pad holds colour x V: without V no texel can be told wholly data.
-    if (g.param[kReach] > 0.0 && valid_channel < 0) return;
-    constexpr int64_t kRows = 16;
-    const int64_t cw = g.cell_width(), ch = g.cell_height();
-    parallel_for((img.height + kRows - 1) / kRows, threads, [&](int64_t task) {
-        const int64_t end = std::min(img.height, (task + 1) * kRows);
-        for (int64_t iy = task * kRows; iy < end; ++iy) {
-            for (int64_t ix = 0; ix < img.width; ++ix) {
-                const int64_t cell = (iy / ch) * g.columns + ix / cw;
-                if (g.cell_face[cell] < 0) continue;
-                linear_detail::texel(model, cell, ix, iy, valid_channel, out.x.data(), out.y.data());
-            }
-        }
-    });
-}
+// The slopes of the texels a band of output rows reads, each computed on its first use and
+// kept in a direct-mapped table (one per thread: a magnified band reads a few hundred texels,
+// each many times). No slope plane as large as the image is ever made: the peak memory of a
+// magnifying conversion stays that of the box (docs/memory.md's bound, 1.25 x the arrays).
+class SlopeCache {
+  public:
+    SlopeCache(const SourceModel& model, int valid_channel)
+        : model_(model), valid_(valid_channel), nch_(model.image.channels) {
+        // At most 2 MB a thread, at most 4096 texels (a magnified 32 x 32 tile reads a few hundred).
+        const size_t bytes = size_t(8 + 8 * nch_);
+        size_t entries = 64;
+        while (entries < 4096 && 2 * entries * bytes <= (size_t(2) << 20)) entries *= 2;
+        bits_ = 0;
+        while ((size_t(1) << bits_) < entries) ++bits_;
+        key_.assign(entries, -1);
+        val_.resize(entries * size_t(2 * nch_));
+        partial_ = model.g.param[kReach] > 0.0 && valid_channel < 0;
+    }
+
+    // c ax (nch values), then c ay (nch values) of the image's texel (ix, iy), both 0 where it
+    // keeps the box (sr x colour per texel^3).
+    const float* get(int64_t ix, int64_t iy) {
+        const Image& img = model_.image;
+        const int64_t index = iy * img.width + ix;
+        const size_t slot = size_t((uint64_t(index) * 0x9E3779B97F4A7C15ull) >> (64 - bits_));
+        float* v = val_.data() + slot * size_t(2 * nch_);
+        if (key_[slot] == index) return v;
+        key_[slot] = index;
+        std::fill(v, v + 2 * nch_, 0.0f);
+        // A partial view's pad holds colour x V: without V no texel can be told wholly data.
+        if (partial_) return v;
+        const Geometry& g = model_.g;
+        const int64_t cell = (iy / g.cell_height()) * g.columns + ix / g.cell_width();
+        if (g.cell_face[cell] >= 0) linear_detail::texel(model_, cell, ix, iy, valid_, v, v + nch_);
+        return v;
+    }
+
+  private:
+    const SourceModel& model_;
+    int valid_;
+    int64_t nch_;
+    int bits_ = 0;
+    bool partial_ = false;
+    std::vector<int64_t> key_;
+    std::vector<float> val_;
+};
 
 // For texel (ix, iy) of `cell`'s continued grid, read in another's place (the texel at
 // `offset` texels into the image): true when the two grids map onto each other by a

@@ -82,7 +82,7 @@ struct SlowPath {
     bool uncovered = false;
     // The linear reconstruction's slopes (area_linear.h) when the conversion magnifies, else
     // none (the box).
-    const LinearSlopes* linear = nullptr;
+    SlopeCache* linear = nullptr;
 
     SlowPath(const Conversion& cv_, const SourceModel& model_, const Singular& sing_)
         : cv(cv_), model(model_), sing(sing_) {}
@@ -113,7 +113,7 @@ struct TexelSink {
 struct LinearTexelSink {
     static constexpr bool kMomentX = true;
     const SourceModel& model;
-    const LinearSlopes& slopes;
+    SlopeCache& slopes;
     int64_t cell;
     double sign;
     PixelSums& sums;
@@ -137,7 +137,9 @@ struct LinearTexelSink {
             for (int64_t c = 0; c < sums.nch; ++c) sums.acc[c] += w * double(v[c]);
             return;
         }
-        const float *sx = slopes.x.data() + at, *sy = slopes.y.data() + at;
+        const int64_t texel = at / model.image.channels;
+        const float* sx = slopes.get(texel % model.image.width, texel / model.image.width);
+        const float* sy = sx + sums.nch;
         const double lx = sign * dx, ly = sign * dy;
         for (int64_t c = 0; c < sums.nch; ++c) {
             const double ax = double(sx[c]), ay = double(sy[c]);
