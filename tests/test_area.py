@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import envconv
-from envconv.resample.options import default_size
+from envconv.resample.options import default_size, magnifies
 
 LAYOUTS = list(envconv.layouts.LAYOUTS)
 PARK = Path(__file__).resolve().parent.parent / "examples" / "data" / "park-latlong-512.exr"
@@ -225,6 +225,71 @@ def test_sun_of_any_layout_keeps_its_energy(source_name, size, to, ratio):
         energy, truth = energy[~near], truth[~near]
     # atol: a tennisball texel in the other band's part holds nothing (up to rounding).
     np.testing.assert_allclose(energy, truth, rtol=5e-3, atol=1e-12)
+
+
+def _patch_centres(name, size, separation, seed):
+    """(rows, cols, channel) of texels of layout ``name`` at size n whose 3 x 3 patch lies
+    wholly inside the layout, CHANNELS x 6 of them, those of one channel ``separation`` apart."""
+    rng = np.random.default_rng(seed)
+    width, height = naive.image_size(name, size)
+    rows, cols = rng.integers(1, height - 1, 4000), rng.integers(1, width - 1, 4000)
+    t = (np.arange(4) + 0.5) / 4
+    inside = np.ones(len(rows), bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            u = (cols[:, None, None] + dx + t[None, None, :]) / width
+            v = (rows[:, None, None] + dy + t[None, :, None]) / height
+            inside &= naive.uv_to_dir(name, *np.broadcast_arrays(u, v))[1].all(axis=(1, 2))
+    rows, cols = rows[inside], cols[inside]
+    centres, _, _ = naive.uv_to_dir(name, (cols + 0.5) / width, (rows + 0.5) / height)
+    picks = [
+        _separated(centres[c::CHANNELS], 6, separation) * CHANNELS + c for c in range(CHANNELS)
+    ]
+    chosen = np.concatenate(picks)
+    channel = np.concatenate([np.full(len(p), c) for c, p in enumerate(picks)])
+    return rows[chosen], cols[chosen], channel, centres[chosen]
+
+
+@pytest.mark.parametrize("source_name, size", [("latlong", 32), ("cube-vcross", 16),
+                                                ("paraboloid", 32), ("octahedral", 24),
+                                                ("tennisball", 16)])  # fmt: skip
+@pytest.mark.parametrize("to, ratio", [("latlong", 2), ("cube-vcross", 4)])
+def test_a_sun_patch_keeps_its_energy_when_magnified(source_name, size, to, ratio):
+    """Magnified 1:2 and 1:4 (horizon pitch), where the area filter integrates its linear
+    reconstruction: 3 x 3-texel suns on black, their texels a ramp SUN (1 + 0.25 dx + 0.15 dy)
+    (so that every texel of a patch has slopes: the centre's are its ramp, the border's are
+    limited by the black around), keep their energy: Σ value · Ω of the texels, the solid
+    angles from naive's formulas by dense sub-samples. The slopes are weighted to integrate to 0
+    over each texel, so each texel hands out exactly its value times its solid angle."""
+    rows, cols, channel, centres = _patch_centres(source_name, size, 0.9, seed=size)
+    width, height = naive.image_size(source_name, size)
+    pixels = np.zeros((height, width, CHANNELS), np.float32)
+    truth = np.zeros(len(rows))
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            value = SUN * (1 + 0.25 * dx + 0.15 * dy)
+            pixels[rows + dy, cols + dx, channel] = value
+            truth += value * _owned_solid_angles(source_name, size, rows + dy, cols + dx, 32)
+    source = envconv.EnvMap(pixels, source_name)
+    n = round(default_size(source, to) * ratio)
+    assert magnifies(source, to, n)
+    energy = _energy_per_sun(envconv.convert(source, to, size=n), to, centres, channel)
+    np.testing.assert_allclose(energy, truth, rtol=2e-3)
+
+
+@pytest.mark.parametrize("name", ["latlong", "cube-vcross", "paraboloid", "octahedral", "sphere"])
+def test_a_constant_map_stays_constant_when_magnified(name):
+    """A constant map magnified 3 x stays its constant in every pixel it covers wholly (the
+    linear reconstruction's slopes are 0 there)."""
+    n = 16
+    width, height = naive.image_size(name, n)
+    source = envconv.EnvMap(np.full((height, width, 3), [0.5, 2.0, 7.0], np.float32), name)
+    size = 3 * default_size(source, "latlong")
+    assert magnifies(source, "latlong", size)
+    result = envconv.convert(source, "latlong", size=size, alpha=True)
+    held = result.pixels[..., 3] == 1
+    np.testing.assert_allclose(result.pixels[held][:, :3], np.broadcast_to([0.5, 2.0, 7.0],
+                                                                           (held.sum(), 3)), rtol=1e-5)  # fmt: skip
 
 
 def _folded_suns(n, seed):

@@ -86,6 +86,19 @@ inline bool whole_texel(const Image& img, const Geometry& g, int64_t cell, int64
     return valid_channel < 0 || v[valid_channel] >= 1.0f;
 }
 
+// True when every direction of texel (ix, iy) of tennisball band `cell` is the band's own
+// (layouts.h: past |phi| = 90 deg a band owns only where |sin phi| cos theta >= sqrt(2)/2,
+// least at the texel's largest |phi| and |theta|). The other band reads the rest of a texel
+// the boundary cuts, so that its slope terms would not add up to 0 over the part read here.
+inline bool tennisball_texel_owned(const Geometry& g, int64_t cell, int64_t ix, int64_t iy) {
+    double a0, b0, a1, b1;
+    cell_local(g, cell, double(ix), double(iy), a0, b0);
+    cell_local(g, cell, double(ix + 1), double(iy + 1), a1, b1);
+    const double phi = std::max(std::fabs(a0), std::fabs(a1)) * tennisball::kPhiHalf;
+    const double theta = std::max(std::fabs(b0), std::fabs(b1)) * tennisball::kThetaHalf;
+    return phi <= 0.5 * kPi || std::sin(phi) * std::cos(theta) > tennisball::kHalfSqrt2 + 1e-9;
+}
+
 // Neighbour (jx, jy) of a texel of `cell`, or null where the stencil may not read it: the
 // texel itself where it is wholly data; past a cell's edge (a cube face's, a folded square's, a
 // tennisball band's, a lat-long's pole rows) the texel across the seam (remap_tap: the one that
@@ -121,6 +134,7 @@ inline void texel(const SourceModel& model, int64_t cell, int64_t ix, int64_t iy
         nb[k] = neighbour(img, g, cell, ix + dx[k], iy + dy[k], valid_channel);
         if (!nb[k]) return;
     }
+    if (g.family == kTennisball && !tennisball_texel_owned(g, cell, ix, iy)) return;
     TexelDensity t = model.texel(cell, ix, iy);
     if (t.gx == kKinked) return;
     const double c = slope_weight(t.m, t.gx, t.gy);
