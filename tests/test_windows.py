@@ -125,6 +125,23 @@ def test_a_hole_converts_as_a_hole_not_as_black_sky(tmp_path, sky, flag):
     np.testing.assert_allclose(flat[flat[:, :, 3] > 0][:, :3], 2.0, rtol=1e-5)
 
 
+def test_a_hole_leaks_nothing_into_a_magnified_map(tmp_path, sky):
+    """The top 13 of 32 rows read 4 x magnified into a 256 x 128 lat-long (each output pixel
+    inside one source texel), where the area filter integrates its linear reconstruction: the
+    texels beside the hole (row 12) keep the box, so each of their pixels is exactly the texel's
+    value (a slope there would read the hole's 0 and tilt the texel towards it); every texel
+    whose stencil holds no hole (rows 0 to 11) gives the pixels of the whole map's conversion,
+    slopes and all (its pixels vary inside a texel)."""
+    write_window(tmp_path / "top.exr", sky[:13], (0, 0, 64, 32), (0, 0, 64, 13))
+    top = envconv.convert(envconv.read(tmp_path / "top.exr"), "latlong", size=128)
+    whole = envconv.convert(envconv.EnvMap(sky, "latlong"), "latlong", size=128)
+    np.testing.assert_allclose(top.pixels[:48, :, :3], whole.pixels[:48], rtol=1e-6)
+    assert np.ptp(whole.pixels[44:48, 8:12, 0]) > 1e-3  # slopes inside a texel of row 11
+    beside = np.repeat(np.repeat(sky[12:13], 4, axis=0), 4, axis=1)
+    np.testing.assert_allclose(top.pixels[48:52, :, :3], beside, rtol=1e-5)
+    np.testing.assert_array_equal(top.pixels[52:], 0)
+
+
 def test_overscan_beyond_the_display_window_is_cut_off(tmp_path, sky):
     """Data window 4 pixels larger than the display window on every side: the map is the
     display window's pixels alone, with nothing missing, so no alpha is added."""
