@@ -277,6 +277,30 @@ def test_a_sun_patch_keeps_its_energy_when_magnified(source_name, size, to, rati
     np.testing.assert_allclose(energy, truth, rtol=2e-3)
 
 
+@pytest.mark.parametrize("source_name", ["perspective", "fisheye"])
+@pytest.mark.parametrize("to", ["latlong", "cube-vcross"])
+def test_a_sun_patch_of_a_partial_view_keeps_its_energy_when_magnified(source_name, to):
+    """The ramp patches above on a 32-px 90° perspective view and 180° fisheye, read 3 x
+    magnified: a partial view's texels take slopes where their stencil is wholly inside the view
+    (V = 1), and keep their energy (value × alpha × the output pixel's solid angle)."""
+    size = 32
+    rows, cols, channel, centres = _patch_centres(source_name, size, 0.5, seed=3)
+    width, height = naive.image_size(source_name, size)
+    pixels = np.zeros((height, width, CHANNELS), np.float32)
+    truth = np.zeros(len(rows))
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            value = SUN * (1 + 0.25 * dx + 0.15 * dy)
+            pixels[rows + dy, cols + dx, channel] = value
+            truth += value * _owned_solid_angles(source_name, size, rows + dy, cols + dx, 32)
+    source = envconv.EnvMap(pixels, source_name)
+    n = round(default_size(source, to) * 3)
+    assert magnifies(source, to, n)
+    out = envconv.convert(source, to, size=n, alpha=True)
+    seen = envconv.EnvMap(out.pixels[..., :CHANNELS] * out.pixels[..., CHANNELS:], to)
+    np.testing.assert_allclose(_energy_per_sun(seen, to, centres, channel), truth, rtol=2e-3)
+
+
 @pytest.mark.parametrize("name", ["latlong", "cube-vcross", "paraboloid", "octahedral", "sphere"])
 def test_a_constant_map_stays_constant_when_magnified(name):
     """A constant map magnified 3 x stays its constant in every pixel it covers wholly (the
