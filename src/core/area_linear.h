@@ -14,9 +14,11 @@
 //
 // A neighbour past a cell's edge is the texel across the seam (a cube face's neighbour face, a
 // folded square's fold, a lat-long's row past the pole). A texel keeps the box (slopes 0)
-// wherever its stencil is not wholly data: a texel or neighbour cut by a disk's rim or past it,
-// in a partial view's pad, whose valid channel V (holes, partial-view pads) is below 1 or whose
-// value is not finite, and a texel that a fold of an octahedral square's density crosses. No
+// wherever its stencil is not wholly data: a texel cut by a disk's rim, a neighbour past it (one
+// the rim cuts is read: its value is its valid part's mean), a texel or neighbour in a partial
+// view's pad, whose valid channel V (holes, partial-view pads) is below 1 or whose value is not
+// finite, a tennisball texel the band boundary cuts (the other band reads the rest of it), and
+// a texel that a fold of an octahedral square's density crosses. No
 // hole value therefore leaks into held texels. Where the general path reads a texel in
 // another's place (a folded square's continued grid past its edge), the slopes are turned into
 // that grid when the two grids map onto each other by a reflection or quarter turn (exact), else
