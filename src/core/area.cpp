@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "area.h"
+#include "area_linear_walk.h"
 #include "area_prefix.h"
 #include "area_slow.h"
 #include "area_tiles.h"
@@ -316,6 +317,7 @@ struct TileScratch {
     SidePath sides[4];                // how the tile took a general-path pixel's sides
 
     PrefixTable table;
+    LinearPrefixTable linear_table;  // the linear reconstruction's (area_linear_walk.h)
     DensityCache density;  // the tile's texel densities (sources without exact rows)
     EdgeMemo edges;
 };
@@ -413,6 +415,102 @@ EdgePixels edge_pixels_for(bool grad, int64_t nch) {
     return nch == 3 ? edge_pixels<3, false> : nch == 4 ? edge_pixels<4, false> : edge_pixels<0, false>;
 }
 
+// grid_edge and edge_pixels for the linear reconstruction (area_linear_walk.h): the same
+// walks through the tile's linear table.
+
+// Integral of the grid's edge from corner a to corner b through the tile's table, along its
+// polyline (count refinement points px, py) in a curved tile.
+template <int NCH, bool kGrad>
+void grid_edge_linear(const AreaJob& job, const CornerGrid& g, const LinearPrefixTable& t, int64_t row_base,
+               size_t a, size_t b, double* out, const double* px = nullptr,
+               const double* py = nullptr, int count = 0) {
+    const int64_t nch = NCH ? NCH : t.nch;
+    for (int64_t c = 0; c <= nch; ++c) out[c] = 0.0;
+    if (count == 0) {
+        edge_integral_linear<NCH, kGrad>(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a],
+                                  g.x[b], g.y[b], g.fx[b], g.fy[b], out);
+        return;
+    }
+    double x0 = g.x[a], y0 = g.y[a];
+    int64_t fx0 = g.fx[a], fy0 = g.fy[a];
+    for (int k = 0; k <= count; ++k) {
+        double x1 = k < count ? px[k] : g.x[b], y1 = k < count ? py[k] : g.y[b];
+        int64_t fx1 = k < count ? floor_texel(x1) : g.fx[b], fy1 = k < count ? floor_texel(y1) : g.fy[b];
+        edge_integral_linear<NCH, kGrad>(t, job.model, row_base, x0, y0, fx0, fy0, x1, y1, fx1, fy1, out);
+        x0 = x1;
+        y0 = y1;
+        fx0 = fx1;
+        fy0 = fy1;
+    }
+}
+
+// Integrate every edge of the direct pixels of rows [j0, j1) of the tile (independent loops,
+// so that the walks of neighbouring edges overlap), then each direct pixel's sums from its
+// four edges: the loop (i, j) -> (i + 1, j) -> (i + 1, j + 1) -> (i, j + 1), top and right
+// edges as walked, bottom and left against their direction.
+template <int NCH, bool kGrad>
+void edge_pixels_linear(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t row_base,
+                 int j0, int j1) {
+    EdgeMemo& e = ts.edges;
+    const int64_t st = e.stride, nch = st - 1;
+    const int w = g.w;
+    const size_t cs = size_t(w + 1);  // corners per grid row
+    const char* dir = ts.direct.data();
+    // A curved tile's edges run along their polylines.
+    auto polyline = [&](size_t index, const double*& px, const double*& py, int& count) {
+        if (!ts.curved) return;
+        px = e.px.data() + e.first[index];
+        py = e.py.data() + e.first[index];
+        count = e.first[index + 1] - e.first[index];
+    };
+    for (int j = j0; j <= j1; ++j) {
+        const char* above = j > j0 ? dir + (j - 1) * w : nullptr;
+        const char* below = j < j1 ? dir + j * w : nullptr;
+        for (int i = 0; i < w; ++i) {
+            if (!((above && above[i]) || (below && below[i]))) continue;
+            const double *px = nullptr, *py = nullptr;
+            int count = 0;
+            polyline(e.horizontal(i, j), px, py, count);
+            grid_edge_linear<NCH, kGrad>(job, g, ts.linear_table, row_base, j * cs + i, j * cs + i + 1,
+                                  &e.hv[size_t(j * w + i) * st], px, py, count);
+        }
+    }
+    for (int j = j0; j < j1; ++j) {
+        const char* row = dir + j * w;
+        for (int i = 0; i <= w; ++i) {
+            if (!((i > 0 && row[i - 1]) || (i < w && row[i]))) continue;
+            const double *px = nullptr, *py = nullptr;
+            int count = 0;
+            polyline(e.vertical(i, j), px, py, count);
+            grid_edge_linear<NCH, kGrad>(job, g, ts.linear_table, row_base, j * cs + i, (j + 1) * cs + i,
+                                  &e.vv[size_t(j * (w + 1) + i) * st], px, py, count);
+        }
+    }
+    for (int j = j0; j < j1; ++j) {
+        const char* row = dir + j * w;
+        for (int i = 0; i < w; ++i) {
+            if (!row[i]) continue;
+            const double* tp = &e.hv[size_t(j * w + i) * st];
+            const double* bt = &e.hv[size_t((j + 1) * w + i) * st];
+            const double* lf = &e.vv[size_t(j * (w + 1) + i) * st];
+            const double* rt = lf + st;
+            double* sum = &e.pixel[size_t(j * w + i) * st];
+            for (int64_t c = 0; c <= (NCH ? NCH : nch); ++c) sum[c] = tp[c] + rt[c] - bt[c] - lf[c];
+        }
+    }
+}
+
+EdgePixels edge_pixels_linear_for(bool grad, int64_t nch) {
+    if (grad) {
+        return nch == 3   ? edge_pixels_linear<3, true>
+               : nch == 4 ? edge_pixels_linear<4, true>
+                          : edge_pixels_linear<0, true>;
+    }
+    return nch == 3   ? edge_pixels_linear<3, false>
+           : nch == 4 ? edge_pixels_linear<4, false>
+                      : edge_pixels_linear<0, false>;
+}
+
 // The box of the corners of the direct pixels of rows [j0, j1) of the tile (empty, xmin >
 // xmax, where there are none).
 void direct_corner_box(const CornerGrid& g, const TileScratch& ts, int j0, int j1, double& xmin,
@@ -436,7 +534,7 @@ void direct_corner_box(const CornerGrid& g, const TileScratch& ts, int j0, int j
 // Build the prefix table over the corners of the direct pixels of rows [j0, j1) of the tile;
 // false when there are none, the box is too large or holds a texel that is not finite.
 bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0, int j1,
-                bool& grad) {
+                bool& grad, SlopeCache* slopes = nullptr) {
     const Geometry& s = job.cv.src;
     // The box of every corner of rows [j0, j1]; where that is too large (a pixel far off, as
     // near a pole), the box of the direct pixels' corners only.
@@ -472,6 +570,7 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     if (!period && (c0 < col_base || c1 >= col_base + s.cell_width())) return false;
     grad = false;
     for (int64_t r = r0; r <= r1; ++r) grad = grad || job.model.row_g[size_t(r - row_base)] != 0.0;
+    if (slopes) return ts.linear_table.build(job.model.image, *slopes, period, r0, r1, c0, c1);
     return ts.table.build(job.model.image, period, r0, r1, c0, c1);
 }
 
@@ -787,10 +886,10 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     const int64_t row0 = (grid.ref_cell / s.columns) * s.cell_height();
     const bool rows = !job.model.row_m.empty();
     const DirectPixel direct = direct_pixel_for(rows, sums.nch);
-    // The linear reconstruction integrates every direct pixel as a polygon (a magnified pixel
-    // spans few texels): the prefix tables and edge walks hold the box only.
+    // The linear reconstruction: its own sinks and, for lat-long and tennisball inputs, its own
+    // tables and walks (area_linear_walk.h).
     const LinearPixel linear = job.linear ? direct_pixel_linear_for(rows, sums.nch) : nullptr;
-    const bool tables = rows && !linear;
+    const bool tables = rows;
     ts.direct.assign(size_t(grid.w * grid.h), 0);
     const int64_t st = grid.w + 1;
     const bool all_direct = straight && whole_tile_direct(s, grid);
@@ -829,17 +928,18 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
     while (band_j0 < grid.h) {
-        bool grad = false, whole = tables && tile_table(job, grid, ts, band_j0, grid.h, grad);
+        bool grad = false, whole = tables && tile_table(job, grid, ts, band_j0, grid.h, grad, sp.linear);
         int band_j1 = grid.h;
         if (!whole && tables) {
             band_j1 = band_j0 + 1;
-            whole = tile_table(job, grid, ts, band_j0, band_j1, grad);
+            whole = tile_table(job, grid, ts, band_j0, band_j1, grad, sp.linear);
         } else if (!tables) {
             band_j1 = grid.h;
         }
         if (whole) {
             ts.edges.reset(grid.w, grid.h, sums.nch);
-            edge_pixels_for(grad, sums.nch)(job, grid, ts, row0, band_j0, band_j1);
+            (linear ? edge_pixels_linear_for : edge_pixels_for)(grad, sums.nch)(job, grid, ts, row0,
+                                                                            band_j0, band_j1);
         }
         for (int j = band_j0; j < band_j1; ++j) {
             for (int i = 0; i < grid.w; ++i) {
