@@ -33,8 +33,9 @@ samples="auto"
     average of level 0 (see :mod:`envconv.resample.mips`).
 filter
     ``area`` (default: each pixel the exact solid-angle mean of the box-reconstructed source
-    over its footprint, docs/geometry.md "Pixel values"; the sample rules above are the point
-    kernel's), ``bilinear``, ``bicubic`` (Catmull-Rom, clamped to the range of the four nearest
+    over its footprint, or of a conservative piecewise-linear reconstruction where the
+    conversion magnifies (:func:`envconv.resample.options.magnifies`), docs/geometry.md "Pixel
+    values"; the sample rules above are the point kernel's), ``bilinear``, ``bicubic`` (Catmull-Rom, clamped to the range of the four nearest
     texels so it can never ring past them: no new negatives next to an HDR highlight) or
     ``nearest``. With a guard ring the area filter makes the cells' pixels and a bilinear tap of
     that map the ring's (:func:`_area_with_guard`).
@@ -120,7 +121,8 @@ def convert(
         Sub-samples per pixel edge S (S×S per pixel).
     filter : {"area", "bilinear", "bicubic", "nearest"}, optional
         ``area``: each pixel the exact solid-angle mean of the box-reconstructed source over
-        its footprint (every texel's energy kept); the others read the source at sub-sample
+        its footprint (every texel's energy kept; piecewise linear where the output is 1.5 ×
+        finer than the source, by solid angle); the others read the source at sub-sample
         points through that filter. Default: ``area``, or ``bilinear`` where the area filter
         cannot make the result yet (a guard ring around a partial view:
         :func:`envconv.resample.options.choose_filter`).
