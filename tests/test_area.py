@@ -277,6 +277,44 @@ def test_a_sun_patch_keeps_its_energy_when_magnified(source_name, size, to, rati
     np.testing.assert_allclose(energy, truth, rtol=2e-3)
 
 
+@pytest.mark.parametrize("source_name", ["paraboloid", "angular"])
+@pytest.mark.parametrize("to", ["latlong", "cube-vcross"])
+def test_a_sun_patch_on_a_disks_rim_keeps_its_energy_when_magnified(source_name, to):
+    """3 x 3 ramp patches centred on texels the rim of a 32-px paraboloid half or angular map
+    cuts (each patch in a channel of its own, its texels past the rim left black), read 3 x
+    magnified: a texel at the rim takes slopes about the centroid of its part inside the disk,
+    so the slope terms add up to 0 over the part the footprints read, and each patch keeps its
+    energy (Σ value × the solid angle of the texel's part inside the disk, naive's formulas)."""
+    n = 32
+    width, height = naive.image_size(source_name, n)
+    t = (np.arange(8) + 0.5) / 8
+    rows, cols = np.mgrid[0:height, 0:width].reshape(2, -1)
+    u, v = np.broadcast_arrays((cols[:, None, None] + t[None, None, :]) / width,
+                               (rows[:, None, None] + t[None, :, None]) / height)  # fmt: skip
+    valid = naive.uv_to_dir(source_name, u, v)[1]
+    cut = np.flatnonzero((valid.mean(axis=(1, 2)) >= 0.3) & ~valid.all(axis=(1, 2)))
+    chosen = np.random.default_rng(n).permutation(cut)[:24]
+    pixels = np.zeros((height, width, len(chosen)), np.float32)
+    truth = np.zeros(len(chosen))
+    for k, (row, col) in enumerate(zip(rows[chosen], cols[chosen], strict=True)):
+        for dy in (-1, 0, 1):
+            for dx in (-1, 0, 1):
+                r, c = row + dy, col + dx
+                if 0 <= r < height and 0 <= c < width:
+                    value = SUN * (1 + 0.25 * dx + 0.15 * dy)
+                    pixels[r, c, k] = value
+                    truth[k] += value * _owned_solid_angles(source_name, n, np.array([r]),
+                                                            np.array([c]), 64)[0]  # fmt: skip
+    source = envconv.EnvMap(pixels, source_name)
+    size = round(default_size(source, to) * 3)
+    assert magnifies(source, to, size)
+    result = envconv.convert(source, to, size=size)
+    lit_rows, lit_cols = np.nonzero(result.pixels.any(axis=-1))
+    omega = _owned_solid_angles(to, size, lit_rows, lit_cols, 16)
+    energy = (result.pixels[lit_rows, lit_cols].astype(np.float64) * omega[:, None]).sum(axis=0)
+    np.testing.assert_allclose(energy, truth, rtol=2e-3)
+
+
 @pytest.mark.parametrize("source_name", ["perspective", "fisheye"])
 @pytest.mark.parametrize("to", ["latlong", "cube-vcross"])
 def test_a_sun_patch_of_a_partial_view_keeps_its_energy_when_magnified(source_name, to):

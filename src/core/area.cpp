@@ -221,10 +221,10 @@ struct LinearDirectSink {
         }
         const int64_t nch = NCH ? NCH : sums.nch, at = (iy * model.image.width + ix) * nch;
         const float* v = model.image.data + at;
-        const float *sx = slopes.get(ix, iy), *sy = sx + nch;
-        const double lx = sign * dx, ly = sign * dy;
+        const float *sx = slopes.get(ix, iy), *sy = sx + nch, *sz = sy + nch;
+        const double lx = sign * dx, ly = sign * dy, la = sign * area;
         for (int64_t c = 0; c < nch; ++c)
-            sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]);
+            sums.acc[c] += w * double(v[c]) + lx * double(sx[c]) + ly * double(sy[c]) + la * double(sz[c]);
         sums.weight += w;
     }
 };

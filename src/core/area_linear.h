@@ -14,12 +14,13 @@
 //
 // A neighbour past a cell's edge is the texel across the seam (a cube face's neighbour face, a
 // folded square's fold, a lat-long's row past the pole). A texel keeps the box (slopes 0)
-// wherever its stencil is not wholly data: a texel cut by a disk's rim, a neighbour past it (one
-// the rim cuts is read: its value is its valid part's mean), a texel or neighbour in a partial
-// view's pad, whose valid channel V (holes, partial-view pads) is below 1 or whose value is not
-// finite, a tennisball texel the band boundary cuts (the other band reads the rest of it), and
-// a texel that a fold of an octahedral square's density crosses. No
-// hole value therefore leaks into held texels. Where the general path reads a texel in
+// wherever its stencil is not wholly data: a texel or neighbour in a partial view's pad, whose
+// valid channel V (holes, partial-view pads) is below 1 or whose value is not finite, a
+// tennisball texel the band boundary cuts (the other band reads the rest of it), and a texel
+// that a fold of an octahedral square's density crosses. No hole value therefore leaks into
+// held texels. A disk's texel that the rim cuts, or whose neighbour lies past it, takes
+// one-sided slopes about the centroid of its part inside the disk (rim_texel; a neighbour the
+// rim cuts is read: its value is its part's mean). Where the general path reads a texel in
 // another's place (a folded square's continued grid past its edge), the slopes are turned into
 // that grid when the two grids map onto each other by a reflection or quarter turn (exact), else
 // that read takes none: the general path cuts footprints at cube seams, so such reads are
@@ -60,6 +61,52 @@ inline void limit(float s, float l, float r, float t, float b, float& ax, float&
     float k = room < d ? room / d * kShrink : 1.0f;
     ax *= k;
     ay *= k;
+}
+
+// The limited slopes of one channel of a disk texel whose stencil lacks neighbours (null: past
+// the rim) or that the rim cuts, its value held at the centroid (ox, oy) of its part inside the
+// disk (texels from its centre): central differences where both neighbours are there, one-sided
+// where one is, else 0, scaled so that the reconstruction stays within the range of the texel
+// and its neighbours over the whole texel (|x - ox| <= 1/2 + |ox|).
+inline void limit_rim(float s, const float* l, const float* r, const float* t, const float* b,
+                      int64_t k, double ox, double oy, float& ax, float& ay) {
+    ax = l && r ? 0.5f * (r[k] - l[k]) : r ? r[k] - s : l ? s - l[k] : 0.0f;
+    ay = t && b ? 0.5f * (b[k] - t[k]) : b ? b[k] - s : t ? s - t[k] : 0.0f;
+    float hi = s, lo = s;
+    for (const float* n : {l, r, t, b}) {
+        if (!n) continue;
+        hi = std::max(hi, n[k]);
+        lo = std::min(lo, n[k]);
+    }
+    const float room = std::min(hi - s, s - lo);
+    const float d = std::fabs(ax) * float(0.5 + std::fabs(ox)) + std::fabs(ay) * float(0.5 + std::fabs(oy));
+    const float q = room < d ? room / d * kShrink : 1.0f;
+    ax *= q;
+    ay *= q;
+}
+
+// The share of texel (ix, iy) inside the disk of the cell whose valid region starts at
+// (x0, y0) (n texels across), and that part's centroid from the texel's centre (texels): the
+// disk's chord clipped to the texel, integrated over 64 columns (centroid within 1e-4).
+inline double disk_part(double n, int64_t x0, int64_t y0, int64_t ix, int64_t iy, double& ox,
+                        double& oy) {
+    const double c = 0.5 * n, top = double(iy - y0) - c, bottom = top + 1.0;
+    double area = 0.0, mx = 0.0, my = 0.0;
+    constexpr int kColumns = 64;
+    for (int k = 0; k < kColumns; ++k) {
+        const double u = (double(k) + 0.5) / kColumns, x = double(ix - x0) + u - c;
+        const double half = std::sqrt(std::max(c * c - x * x, 0.0));
+        const double y0c = std::max(-half, top), y1c = std::min(half, bottom);
+        if (!(y1c > y0c)) continue;
+        const double h = y1c - y0c;
+        area += h;
+        mx += h * (u - 0.5);
+        my += h * (0.5 * (y0c + y1c) - top - 0.5);
+    }
+    if (!(area > 0.0)) return 0.0;
+    ox = mx / area;
+    oy = my / area;
+    return area / kColumns;
 }
 
 // True when texel (ix, iy) of `cell` is wholly data for a stencil: in the cell's valid region
@@ -122,15 +169,59 @@ inline const float* neighbour(const Image& img, const Geometry& g, int64_t cell,
     return img.texel(ky, kx);
 }
 
+// The slopes of a disk's texel (ix, iy) of `cell` that the rim cuts or whose stencil reaches
+// past it: its value held at the centroid of its part inside the disk, so that the slope terms
+// add up to 0 over that part (the part the cell's footprints read: the rest of the texel lies
+// in the other cell's or past the rim), the centroid's term k = -(c ax ox + c ay oy) per unit
+// area into z.
+inline void rim_texel(const SourceModel& model, int64_t cell, int64_t ix, int64_t iy,
+                      int valid_channel, float* x, float* y, float* z) {
+    const Image& img = model.image;
+    const Geometry& g = model.g;
+    int64_t sx = ix;
+    if (!whole_texel(img, g, cell, sx, iy, valid_channel, true)) return;
+    const int64_t x0 = (cell % g.columns) * g.cell_width() + g.guard;
+    const int64_t y0 = (cell / g.columns) * g.cell_height() + g.guard;
+    double ox = 0.0, oy = 0.0;
+    // A sliver (under a tenth of the texel) keeps the box: its centroid is far off-centre.
+    if (disk_part(double(g.n), x0, y0, ix, iy, ox, oy) < 0.1) return;
+    const float* nb[4];
+    const int64_t dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
+    for (int k = 0; k < 4; ++k) nb[k] = neighbour(img, g, cell, ix + dx[k], iy + dy[k], valid_channel);
+    TexelDensity t = model.texel(cell, ix, iy);
+    const double c = slope_weight(t.m, t.gx, t.gy);
+    const float* s = img.texel(iy, ix);
+    for (int64_t k = 0; k < img.channels; ++k) {
+        float ax, ay;
+        limit_rim(s[k], nb[0], nb[1], nb[2], nb[3], k, ox, oy, ax, ay);
+        const double cx = c * double(ax), cy = c * double(ay), cz = -(cx * ox + cy * oy);
+        const bool ok = std::isfinite(cx) && std::isfinite(cy) && std::isfinite(cz);
+        x[k] = ok ? float(cx) : 0.0f;
+        y[k] = ok ? float(cy) : 0.0f;
+        z[k] = ok ? float(cz) : 0.0f;
+    }
+}
+
 // The slopes of texel (ix, iy) of `cell`, times c, into x, y (nch each; left as they are, 0,
-// where it keeps the box).
+// where it keeps the box); a disk's texel at its rim through rim_texel, which also sets z.
 inline void texel(const SourceModel& model, int64_t cell, int64_t ix, int64_t iy,
-                  int valid_channel, float* x, float* y) {
+                  int valid_channel, float* x, float* y, float* z) {
     const Image& img = model.image;
     const Geometry& g = model.g;
     const int64_t dx[4] = {-1, 1, 0, 0}, dy[4] = {0, 0, -1, 1};
     const float* nb[4];
     int64_t sx = ix;
+    if (g.disk()) {
+        bool whole = whole_texel(img, g, cell, sx, iy, valid_channel);
+        for (int k = 0; k < 4 && whole; ++k) {
+            int64_t jx = ix + dx[k];
+            whole = whole_texel(img, g, cell, jx, iy + dy[k], valid_channel);
+        }
+        if (!whole) {
+            rim_texel(model, cell, ix, iy, valid_channel, x, y, z);
+            return;
+        }
+    }
     if (!whole_texel(img, g, cell, sx, iy, valid_channel)) return;
     for (int k = 0; k < 4; ++k) {
         nb[k] = neighbour(img, g, cell, ix + dx[k], iy + dy[k], valid_channel);
@@ -162,31 +253,33 @@ class SlopeCache {
     SlopeCache(const SourceModel& model, int valid_channel)
         : model_(model), valid_(valid_channel), nch_(model.image.channels) {
         // At most 2 MB a thread, at most 4096 texels (a magnified 32 x 32 tile reads a few hundred).
-        const size_t bytes = size_t(8 + 8 * nch_);
+        const size_t bytes = size_t(8 + 12 * nch_);
         size_t entries = 64;
         while (entries < 4096 && 2 * entries * bytes <= (size_t(2) << 20)) entries *= 2;
         bits_ = 0;
         while ((size_t(1) << bits_) < entries) ++bits_;
         key_.assign(entries, -1);
-        val_.resize(entries * size_t(2 * nch_));
+        val_.resize(entries * size_t(3 * nch_));
         partial_ = model.g.param[kReach] > 0.0 && valid_channel < 0;
     }
 
-    // c ax (nch values), then c ay (nch values) of the image's texel (ix, iy), both 0 where it
-    // keeps the box (sr x colour per texel^3).
+    // c ax (nch values), then c ay, then k (nch values each) of the image's texel (ix, iy), all
+    // 0 where it keeps the box (sr x colour per texel^3; k per texel^2: a disk's rim texel's
+    // centroid term, 0 elsewhere).
     const float* get(int64_t ix, int64_t iy) {
         const Image& img = model_.image;
         const int64_t index = iy * img.width + ix;
         const size_t slot = size_t((uint64_t(index) * 0x9E3779B97F4A7C15ull) >> (64 - bits_));
-        float* v = val_.data() + slot * size_t(2 * nch_);
+        float* v = val_.data() + slot * size_t(3 * nch_);
         if (key_[slot] == index) return v;
         key_[slot] = index;
-        std::fill(v, v + 2 * nch_, 0.0f);
+        std::fill(v, v + 3 * nch_, 0.0f);
         // A partial view's pad holds colour x V: without V no texel can be told wholly data.
         if (partial_) return v;
         const Geometry& g = model_.g;
         const int64_t cell = (iy / g.cell_height()) * g.columns + ix / g.cell_width();
-        if (g.cell_face[cell] >= 0) linear_detail::texel(model_, cell, ix, iy, valid_, v, v + nch_);
+        if (g.cell_face[cell] >= 0)
+            linear_detail::texel(model_, cell, ix, iy, valid_, v, v + nch_, v + 2 * nch_);
         return v;
     }
 

@@ -139,12 +139,12 @@ struct LinearTexelSink {
         }
         const int64_t texel = at / model.image.channels;
         const float* sx = slopes.get(texel % model.image.width, texel / model.image.width);
-        const float* sy = sx + sums.nch;
-        const double lx = sign * dx, ly = sign * dy;
+        const float *sy = sx + sums.nch, *sz = sy + sums.nch;
+        const double lx = sign * dx, ly = sign * dy, la = sign * area;
         for (int64_t c = 0; c < sums.nch; ++c) {
             const double ax = double(sx[c]), ay = double(sy[c]);
             sums.acc[c] += w * double(v[c]) + lx * (turn[0] * ax + turn[1] * ay) +
-                           ly * (turn[2] * ax + turn[3] * ay);
+                           ly * (turn[2] * ax + turn[3] * ay) + la * double(sz[c]);
         }
     }
 };
