@@ -163,15 +163,16 @@ def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | Non
 RIM_SOURCES = ("sphere", "angular")
 
 
-def _mean_pixel_solid_angle(layout: Layout, size: int, guard: int = 0) -> float:
+def _mean_pixel_solid_angle(layout: Layout, size: int) -> float:
     """Mean solid angle (sr) of a valid pixel of ``layout`` at size N = ``size``: what it
-    covers (4π; a partial view's own, from its pixels' solid angles) over its valid pixels."""
+    covers (4π; a partial view's own, summed over its pixels at N = 64, since it does not depend
+    on N) over its valid pixels."""
     count = layout.n_faces * layout.content_width(size) * size * (math.pi / 4 if layout.disk else 1)
     if not layout.partial:
         return 4 * math.pi / count
     from ..layouts.geometry import pixel_solid_angles
 
-    return float(pixel_solid_angles(layout, size, guard, samples=2).sum()) / count
+    return float(pixel_solid_angles(layout, 64, 0, samples=4).sum()) / count
 
 
 def magnifies(source: EnvMap, to: Layout | str, size: int) -> bool:
@@ -180,7 +181,7 @@ def magnifies(source: EnvMap, to: Layout | str, size: int) -> bool:
     :data:`LINEAR_MAGNIFICATION`. The area filter then integrates its conservative
     piecewise-linear reconstruction rather than the box, which would show texel blocks."""
     to = get_layout(to)
-    texel = _mean_pixel_solid_angle(source.layout, source.size, source.guard)
+    texel = _mean_pixel_solid_angle(source.layout, source.size)
     return _mean_pixel_solid_angle(to, size) * LINEAR_MAGNIFICATION < texel
 
 
