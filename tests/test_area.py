@@ -365,6 +365,26 @@ def test_the_linear_reconstructions_direct_path_is_its_general_path(source_name,
     assert np.max(np.abs(direct - general) / np.maximum(np.abs(general), 1e-3)) < 2e-3
 
 
+def test_inf_and_nan_stay_in_their_texels_when_magnified():
+    """A 64 x 32 lat-long read 3 x magnified into a 192 x 96 one (each texel 3 x 3 pixels):
+    an inf and a NaN texel make exactly their own 9 pixels inf and NaN in their channel (their
+    neighbours' stencils hold a value that is not finite, so those keep the box: no slope
+    carries inf or NaN into them), and every other value stays finite."""
+    pixels = np.random.default_rng(0).random((32, 64, 3)).astype(np.float32) + 0.5
+    pixels[10, 20, 0] = np.inf
+    pixels[20, 40, 1] = np.nan
+    source = envconv.EnvMap(pixels, "latlong")
+    assert magnifies(source, "latlong", 96)
+    result = envconv.convert(source, "latlong", size=96).pixels
+    inf, nan = np.zeros((96, 192), bool), np.zeros((96, 192), bool)
+    inf[30:33, 60:63] = True
+    nan[60:63, 120:123] = True
+    np.testing.assert_array_equal(np.isposinf(result[..., 0]), inf)
+    np.testing.assert_array_equal(np.isnan(result[..., 1]), nan)
+    assert np.isfinite(result[..., 0][~inf]).all() and np.isfinite(result[..., 1][~nan]).all()
+    assert np.isfinite(result[..., 2]).all()
+
+
 @pytest.mark.parametrize("name", ["latlong", "cube-vcross", "paraboloid", "octahedral", "sphere"])
 def test_a_constant_map_stays_constant_when_magnified(name):
     """A constant map magnified 3 x stays its constant in every pixel it covers wholly (the
