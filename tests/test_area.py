@@ -177,6 +177,31 @@ def test_one_texel_sun_keeps_its_energy(name, ratio, sky_with_suns):
     np.testing.assert_allclose(energy[seen], truth[seen], rtol=5e-3)
 
 
+@pytest.mark.parametrize("n", [35, 128, 129, 140])
+def test_sun_near_a_pole_keeps_its_energy(n):
+    """Suns within 8 rows (2.8°) of a 1024 × 512 lat-long's poles into cube faces whose face centre
+    (a pole's image) falls on a pixel centre (35, 129), a pixel corner (128, 140), and a tile
+    border (129: the centre pixel 64 starts a 32-px tile; 128: the corner is a tile corner).
+    The pixels around a pole take the general path and the tiles beside them the direct one;
+    a 1-px tile beside the pole pixel, whose grid cannot tell how its edges bend, once lost up
+    to three quarters of a sun. Each conversion holds one sun per channel."""
+    height = 512
+    rng = np.random.default_rng(n)
+    rows = np.concatenate([rng.integers(0, 8, 6), height - 1 - rng.integers(0, 8, 6)])
+    cols = rng.integers(0, 2 * height, 12)
+    lat = math.pi * (0.5 - (rows + 0.5) / height)
+    lon = 2 * math.pi * (0.5 - (cols + 0.5) / (2 * height))
+    dirs = np.stack([np.sin(lon) * np.cos(lat), np.sin(lat), np.cos(lon) * np.cos(lat)], -1)
+    energy = np.zeros(len(rows))
+    for first in range(0, len(rows), CHANNELS):
+        suns = np.arange(first, first + CHANNELS)
+        pixels = np.zeros((height, 2 * height, CHANNELS), np.float32)
+        pixels[rows[suns], cols[suns], np.arange(CHANNELS)] = SUN
+        result = envconv.convert(envconv.EnvMap(pixels, "latlong"), "cube-vcross", size=n)
+        energy[suns] = _energy_per_sun(result, "cube-vcross", dirs[suns], np.arange(CHANNELS))
+    np.testing.assert_allclose(energy, SUN * _texel_solid_angle(height, rows), rtol=5e-3)
+
+
 @pytest.mark.parametrize("name", ["cube-vcross", "sphere", "octahedral", "paraboloid"])
 def test_sun_keeps_its_energy_at_1_to_64(name):
     """A 1:64 reduction (a 4096 × 2048 lat-long into a map 64 times coarser at the horizon):
