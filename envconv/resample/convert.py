@@ -36,8 +36,10 @@ filter
     over its footprint, docs/geometry.md "Pixel values"; the sample rules above are the point
     kernel's), ``bilinear``, ``bicubic`` (Catmull-Rom, clamped to the range of the four nearest
     texels so it can never ring past them: no new negatives next to an HDR highlight) or
-    ``nearest``. With a guard ring the area filter makes the cells' pixels and a bilinear tap of
-    that map the ring's (:func:`_area_with_guard`).
+    ``nearest``. With a guard ring the area filter makes the cells' pixels and, around a
+    whole-sphere layout, a bilinear tap of that map the ring's; around a partial view the ring
+    is more of the view, each pixel the exact mean over its own footprint under the continued
+    mapping (:func:`_area_with_guard`).
 """
 
 from __future__ import annotations
@@ -120,8 +122,8 @@ def convert(
         ``area``: each pixel the exact solid-angle mean of the box-reconstructed source over
         its footprint (every texel's energy kept); the others read the source at sub-sample
         points through that filter. Default: ``area``, or ``bilinear`` where the area filter
-        cannot make the result yet (a guard ring around a partial view:
-        :func:`envconv.resample.options.choose_filter`).
+        cannot make the result exactly (a fisheye whose guard ring reaches the point behind its
+        view: :func:`envconv.resample.options.choose_filter`).
     rotate : "YAW,PITCH,ROLL" or 3 numbers, optional
         Rotation of the environment in degrees (see :mod:`envconv.layouts.rotation`).
     guard : int or "fill"
