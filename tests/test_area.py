@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import envconv
-from envconv.resample.options import default_size
+from envconv.resample.options import auto_samples, default_size, output_layout
 
 LAYOUTS = list(envconv.layouts.LAYOUTS)
 PARK = Path(__file__).resolve().parent.parent / "examples" / "data" / "park-latlong-512.exr"
@@ -457,21 +457,37 @@ def test_rim_source_into_a_mirror_ball_keeps_each_region(source_name, pitch):
 
 
 @pytest.mark.parametrize("fov, guard", [(300, 2), (350, 1), (260, "fill")])
-def test_where_the_area_filter_is_not_used_yet(fov, guard):
+def test_a_fisheye_ring_past_the_point_behind_is_point_sampled_around_exact_pixels(fov, guard):
     """A fisheye whose guard ring (or filled corners) reaches θ = 180°, the point behind its
-    view (fov/2 × the ring's outer radius 1 + 2G/N, or √2), takes the bilinear point kernel
-    by default: the continued map folds there, and the area filter's ring pixels were up to
-    28 % (fov 300, G = 4 of 32 px), 42 % (fov 350, G = 1) and 1.5 % (fov 260, fill) off a
-    brute-force mean (measured). Asking for the area filter there is a usage error, not
-    a silently wrong map."""
+    view (fov/2 × the ring's outer radius 1 + 2G/N, or √2): the continued map folds there, and
+    area footprints of its ring pixels were up to 28 % (fov 300, G = 4 of 32 px), 42 % (fov
+    350, G = 1) and 1.5 % (fov 260, fill) off a brute-force mean (measured). So that ring is
+    point-sampled (the bilinear kernel's ring at the automatic sample count), while every pixel that
+    holds valid directions stays the area filter's (the ringless map's, bit for bit: their
+    suns keep their energy), by default and with --filter area alike."""
     rng = np.random.default_rng(3)
     source = envconv.EnvMap(rng.random((16, 32, 3)).astype(np.float32), "latlong")
-    default = envconv.convert(source, "fisheye", size=16, fov=fov, guard=guard)
-    bilinear = envconv.convert(source, "fisheye", size=16, fov=fov, guard=guard,
-                               filter="bilinear")  # fmt: skip
-    np.testing.assert_array_equal(default.pixels, bilinear.pixels)
-    with pytest.raises(envconv.UsageError, match="point behind the view"):
-        envconv.convert(source, "fisheye", size=16, fov=fov, guard=guard, filter="area")
+    n = 16
+    default = envconv.convert(source, "fisheye", size=n, fov=fov, guard=guard, alpha=True)
+    area = envconv.convert(source, "fisheye", size=n, fov=fov, guard=guard, alpha=True,
+                           filter="area")  # fmt: skip
+    layout, _ = output_layout(source, "fisheye", n, fov=fov, guard=guard)
+    samples = auto_samples(source, layout, n)
+    bilinear = envconv.convert(source, "fisheye", size=n, fov=fov, guard=guard, alpha=True,
+                               filter="bilinear", samples=samples)  # fmt: skip
+    plain = envconv.convert(source, "fisheye", size=n, fov=fov, alpha=True)
+    np.testing.assert_array_equal(default.pixels, area.pixels)
+    ring = 0 if guard == "fill" else guard
+    held = plain.pixels[..., 3] > 0
+    cut = default.pixels[ring : ring + n, ring : ring + n]
+    np.testing.assert_array_equal(cut[held], plain.pixels[held])
+    # The point kernel's valid pixels differ (it does not keep texels' energy) ...
+    assert not np.array_equal(bilinear.pixels[ring : ring + n, ring : ring + n][held], cut[held])
+    # ... but the ring is its ring.
+    outside = np.ones(default.pixels.shape[:2], bool)
+    outside[ring : ring + n, ring : ring + n][held] = False
+    np.testing.assert_allclose(default.pixels[outside], bilinear.pixels[outside], rtol=1e-6,
+                               atol=1e-7)  # fmt: skip
 
 
 def _cells_without_ring(pixels, name, n, guard):

@@ -71,6 +71,7 @@ from .options import (
     output_channels,
     output_layout,
     rim_to_mirror_ball,
+    ring_past_antipode,
 )
 from .regrid import output_on_grid, source_on_centres
 
@@ -121,9 +122,9 @@ def convert(
     filter : {"area", "bilinear", "bicubic", "nearest"}, optional
         ``area``: each pixel the exact solid-angle mean of the box-reconstructed source over
         its footprint (every texel's energy kept); the others read the source at sub-sample
-        points through that filter. Default: ``area``, or ``bilinear`` where the area filter
-        cannot make the result exactly (a fisheye whose guard ring reaches the point behind its
-        view: :func:`envconv.resample.options.choose_filter`).
+        points through that filter. Default: ``area`` (a fisheye guard ring that reaches the
+        point behind the view, where the continued map folds, is point-sampled around the
+        view's exact pixels: :func:`envconv.resample.options.choose_filter`).
     rotate : "YAW,PITCH,ROLL" or 3 numbers, optional
         Rotation of the environment in degrees (see :mod:`envconv.layouts.rotation`).
     guard : int or "fill"
@@ -174,7 +175,7 @@ def convert(
     (128, 96, 3)
     """
     to, size = output_layout(envmap, to, size, fov, yaw, pitch, roll, out_convention, mips, guard)
-    filter = choose_filter(envmap, guard, filter, to, size)
+    filter = choose_filter(filter)
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
@@ -292,9 +293,13 @@ def _resample(
     if not _level0_unused(envmap, to, size, guard_px, irradiance, needs_coverage, mips):
         # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
         if filter == "area" and (guard_px or fill):
-            # A chain's ring takes the one sample count a point-sampled chain would (a view's
-            # ring is the area filter's own: one exact piece a pixel).
-            ring_samples = auto_samples(envmap, to, size) if mips and not to.partial else 1
+            # A point-sampled ring takes the one sample count a point-sampled chain would: a
+            # chain's ring around a whole-sphere layout, and a fisheye ring past the point
+            # behind the view (a view's other rings are the area filter's own: one exact
+            # piece a pixel).
+            folded = ring_past_antipode(to, size, "fill" if fill else guard_px)
+            point_ring = (mips and not to.partial) or folded
+            ring_samples = auto_samples(envmap, to, size) if point_ring else 1
             _area_with_guard(src, sgeo, to, size, guard_px, fill, n_samples, ring_samples, rot,
                              out, None if direct_alpha else coverage, weights, direct_alpha)  # fmt: skip
         else:
@@ -376,7 +381,19 @@ def _area_with_guard(src, sgeo, to, size, guard, fill, samples, ring_samples, ro
         src, no_rips, 0, 0, sgeo, inner_geometry, 1.0, 1.0, samples or 1, kernels.AREA_FILTER,
         rot, False, inner, inner_coverage, inner_weights, zeroed=True,
     )  # fmt: skip
-    if to.partial:
+    if to.partial and ring_past_antipode(to, size, "fill" if fill else guard):
+        # A fisheye ring that reaches the point behind the view: the continued map folds the
+        # circle there onto that one direction and back, so a ring pixel has no footprint of
+        # its own. The ring is point-sampled from the source at each pixel's continued
+        # direction (as the bilinear kernel makes it); the view's pixels stay exact below.
+        kernels.resample_rows(
+            src, no_rips, 0, 0, sgeo, kernel_geometry(to, size, guard), 1.0, 1.0, ring_samples,
+            kernels.FILTER_BILINEAR, rot, fill, out, coverage, weights, zeroed=True,
+            coverage_channel=coverage_channel,
+        )  # fmt: skip
+        if weights is not None:
+            weights *= 4.0 / (to.content_width(size) * size * ring_samples**2)
+    elif to.partial:
         kernels.resample_rows(
             src, no_rips, 0, 0, sgeo, kernel_geometry(to, size, guard, output=True), 1.0, 1.0,
             samples or 1, kernels.AREA_FILTER, rot, fill, out, coverage, weights, zeroed=True,

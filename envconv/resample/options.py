@@ -133,32 +133,22 @@ def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float
     return int(min(max(round(pitch_out / pitch_in), 1), MAX_SAMPLES))
 
 
-def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | None = None,
-                  size: int | None = None) -> str:  # fmt: skip
-    """The filter a conversion uses: ``requested``, or without one the area filter, except for
-    a fisheye whose guard ring reaches the point behind its view (:func:`ring_past_antipode`),
-    which takes the bilinear point kernel; UsageError when ``area`` is asked for there, or the
-    name is unknown.
+def choose_filter(requested: str | None) -> str:
+    """The filter a conversion uses: ``requested``, or without one the area filter; UsageError
+    for an unknown name.
 
-    Everything else takes the area filter: a partial view as input (the part of a footprint
-    outside the view is a hole, :mod:`envconv.resample.partial`); a guard ring around a
-    whole-sphere layout (its cells the area filter's, its ring what a GPU reads across their
-    edge: :func:`envconv.resample.convert.convert`); and a guard ring (or ``fill``) around a
-    partial view (``to``, of size ``size``), whose ring pixels are more of the view: each the
-    exact mean over its own footprint under the continued mapping (the image plane extended,
-    the fisheye's radial formula continued), with alpha 0."""
+    The area filter takes every case: a partial view as input (the part of a footprint outside
+    the view is a hole, :mod:`envconv.resample.partial`); a guard ring around a whole-sphere
+    layout (its cells the area filter's, its ring what a GPU reads across their edge:
+    :func:`envconv.resample.convert.convert`); and a guard ring (or ``fill``) around a partial
+    view, whose ring pixels are more of the view: each the exact
+    mean over its own footprint under the continued mapping (the image plane extended, the
+    fisheye's radial formula continued), with alpha 0. Only a fisheye ring that reaches the
+    point behind the view (:func:`ring_past_antipode`) has no footprints of its own there: its
+    ring is point-sampled, the view's pixels still exact."""
     if requested is not None and requested not in FILTERS:
         raise UsageError(f"unknown filter {requested!r}; choose one of {', '.join(FILTERS)}")
-    reason = None
-    if to is not None and ring_past_antipode(to, size, guard):
-        reason = "a fisheye guard ring that reaches the point behind the view"
-    if requested is None:
-        return "bilinear" if reason else "area"
-    if requested == "area" and reason:
-        raise UsageError(f"the area filter does not take {reason} (half the fov times the "
-                         "ring's outer radius must stay below 180 degrees): use --filter "
-                         "bilinear, or a smaller --guard or --fov")  # fmt: skip
-    return requested
+    return requested or "area"
 
 
 def ring_past_antipode(to: Layout, size: int | None, guard) -> bool:
