@@ -193,3 +193,25 @@ def test_help_states_the_default_size_rule_with_numbers_the_code_gives(command):
     assert default_size(source, "cube-vcross") == cube
     assert default_size(source, "latlong") == latlong
     assert default_size(source, "cube-vcross", mips=True) == chain
+
+
+def test_convert_a_guarded_view_with_the_area_filter(tmp_path, sky):
+    """``--filter area`` with ``--guard`` around a perspective view exits 0 (it exited 2): the
+    file re-opens as the guarded view, its valid pixels the ringless map's and its ring alpha
+    0; so does a fisheye whose ring reaches the point behind the view (that ring is
+    point-sampled around the view's exact pixels)."""
+    out, plain = tmp_path / "view.exr", tmp_path / "plain.exr"
+    view = ["--to", "perspective", "--size", 16, "--pitch", -30, "--alpha"]
+    result = run_cli(["convert", sky, out, *view, "--guard", 2, "--filter", "area"])
+    assert result.exit_code == 0, result.stderr
+    assert run_cli(["convert", sky, plain, *view]).exit_code == 0
+    back, ringless = envconv.read(out), envconv.read(plain)
+    assert back.guard == 2 and back.pixels.shape == (20, 20, 4)
+    np.testing.assert_array_equal(back.pixels[2:18, 2:18], ringless.pixels)
+    ring = np.ones((20, 20), bool)
+    ring[2:18, 2:18] = False
+    assert np.all(back.pixels[ring][:, 3] == 0) and np.all(back.pixels[ring][:, :3] > 0)
+    folded = run_cli(["convert", sky, tmp_path / "fish.exr", "--to", "fisheye", "--fov", 300,
+                      "--size", 16, "--guard", 4, "--filter", "area"])  # fmt: skip
+    assert folded.exit_code == 0, folded.stderr
+    assert envconv.read(tmp_path / "fish.exr").pixels.shape[:2] == (24, 24)

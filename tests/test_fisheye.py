@@ -50,7 +50,10 @@ def _pattern_at(layout, n: int, du: float = 0.0) -> np.ndarray:
 def test_fisheye_is_ffmpegs_picture(source, tmp_path, ours, theirs):
     path, sky = source
     peer = v360(path, tmp_path / "fisheye.png", f"e:fisheye:w={N}:h={N}{theirs}")
-    out = envconv.convert(sky, to="fisheye", size=N, samples=1, guard="fill", **ours)
+    # ffmpeg reads one bilinear tap at each pixel centre: so does envconv's point kernel (the
+    # area filter, the default since a view's ring takes it too, is each pixel's mean).
+    out = envconv.convert(sky, to="fisheye", size=N, samples=1, guard="fill", filter="bilinear",
+                          **ours)  # fmt: skip
     layout = out.layout
     truth = _pattern_at(layout, N)
     wrong = {

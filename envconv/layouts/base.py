@@ -160,12 +160,24 @@ class Layout:
         """The view options as a dict (empty for layouts without a view)."""
         return dict(self.view)
 
-    def kernel_params(self, n: int | None = None, guard: int = 0) -> np.ndarray:
+    def kernel_params(self, n: int | None = None, guard: int = 0,
+                      output: bool = False) -> np.ndarray:  # fmt: skip
         """The chart's ``PARAM_COUNT`` parameters for the core; a partial layout's reach puts
-        uncovered directions in the middle of a guard ring padded by :data:`PARTIAL_PAD`."""
+        uncovered directions in the middle of a guard ring padded by :data:`PARTIAL_PAD`.
+
+        ``output``: the parameters of an image being made, whose reach takes in the whole
+        image, guard ring and ``--guard fill`` corners included (the area filter finds where a
+        source's pole lands in an output pixel by the inverse map: a reach at the view's edge
+        would put a pole in the ring on that edge): a fisheye's π / h (no angle is clamped), a
+        perspective view's twice its grown image's half-extent."""
         params = np.zeros(PARAM_COUNT)
         params[: len(self.params)] = self.params
-        if self.partial and n:
+        if self.partial and n and output:
+            if self.family == FAMILY_FISHEYE:
+                params[_REACH] = np.pi / params[0]
+            else:
+                params[_REACH] = 2.0 * (1.0 + 2.0 * guard / min(n, self.content_width(n)))
+        elif self.partial and n:
             params[_REACH] = 1.0 + 2.0 * max(guard - PARTIAL_PAD // 2, 0) / n
         return params
 

@@ -25,13 +25,16 @@ __all__ = [
 ]
 
 
-def kernel_geometry(layout: Layout | str, size: int, guard: int = 0):
+def kernel_geometry(layout: Layout | str, size: int, guard: int = 0, output: bool = False):
     """The (geo, cell_face, cell_turns, face_cell) arrays the kernels take: ``geo`` is
-    [family, N, G, N_x, columns, rows, the chart's parameters] (float64)."""
+    [family, N, G, N_x, columns, rows, the chart's parameters] (float64). ``output``: an
+    image being made, whose partial view's inverse map reaches over its whole image
+    (:meth:`envconv.layouts.base.Layout.kernel_params`)."""
     layout = get_layout(layout)
     layout.validate_size(size)
     head = [layout.family, size, guard, layout.content_width(size), layout.columns, layout.rows]
-    geo = np.concatenate([np.array(head, np.float64), layout.kernel_params(size, guard)])
+    params = layout.kernel_params(size, guard, output)
+    geo = np.concatenate([np.array(head, np.float64), params])
     return (geo, *layout.kernel_tables())
 
 

@@ -37,8 +37,10 @@ filter
     conversion magnifies (:func:`envconv.resample.options.magnifies`), docs/geometry.md "Pixel
     values"; the sample rules above are the point kernel's), ``bilinear``, ``bicubic`` (Catmull-Rom, clamped to the range of the four nearest
     texels so it can never ring past them: no new negatives next to an HDR highlight) or
-    ``nearest``. With a guard ring the area filter makes the cells' pixels and a bilinear tap of
-    that map the ring's (:func:`_area_with_guard`).
+    ``nearest``. With a guard ring the area filter makes the cells' pixels and, around a
+    whole-sphere layout, a bilinear tap of that map the ring's; around a partial view the ring
+    is more of the view, each pixel the exact mean over its own footprint under the continued
+    mapping (:func:`_area_with_guard`).
 """
 
 from __future__ import annotations
@@ -72,6 +74,7 @@ from .options import (
     output_channels,
     output_layout,
     rim_to_mirror_ball,
+    ring_past_antipode,
 )
 from .regrid import output_on_grid, source_on_centres
 
@@ -123,9 +126,9 @@ def convert(
         ``area``: each pixel the exact solid-angle mean of the box-reconstructed source over
         its footprint (every texel's energy kept; piecewise linear where the output is 1.5 ×
         finer than the source, by solid angle); the others read the source at sub-sample
-        points through that filter. Default: ``area``, or ``bilinear`` where the area filter
-        cannot make the result yet (a guard ring around a partial view:
-        :func:`envconv.resample.options.choose_filter`).
+        points through that filter. Default: ``area`` (a fisheye guard ring that reaches the
+        point behind the view, where the continued map folds, is point-sampled around the
+        view's exact pixels: :func:`envconv.resample.options.choose_filter`).
     rotate : "YAW,PITCH,ROLL" or 3 numbers, optional
         Rotation of the environment in degrees (see :mod:`envconv.layouts.rotation`).
     guard : int or "fill"
@@ -176,7 +179,7 @@ def convert(
     (128, 96, 3)
     """
     to, size = output_layout(envmap, to, size, fov, yaw, pitch, roll, out_convention, mips, guard)
-    filter = choose_filter(envmap, guard, filter, to)
+    filter = choose_filter(filter)
     options = dict(size=size, samples=samples, filter=filter, rotate=rotate, guard=guard,
                    alpha=alpha, mips=mips, roughness=roughness, irradiance=irradiance,
                    in_convention=in_convention, out_convention=out_convention, up=up, axes=axes)  # fmt: skip
@@ -298,8 +301,13 @@ def _resample(
     if not _level0_unused(envmap, to, size, guard_px, irradiance, needs_coverage, mips):
         # A same-grid copy overwrites the kernel's colour: no rip-map for it to read.
         if filter == "area" and (guard_px or fill):
-            # A chain's ring takes the one sample count a point-sampled chain would.
-            ring_samples = auto_samples(envmap, to, size) if mips else 1
+            # A point-sampled ring takes the one sample count a point-sampled chain would: a
+            # chain's ring around a whole-sphere layout, and a fisheye ring past the point
+            # behind the view (a view's other rings are the area filter's own: one exact
+            # piece a pixel).
+            folded = ring_past_antipode(to, size, "fill" if fill else guard_px)
+            point_ring = (mips and not to.partial) or folded
+            ring_samples = auto_samples(envmap, to, size) if point_ring else 1
             _area_with_guard(src, sgeo, to, size, guard_px, fill, n_samples, ring_samples, rot,
                              out, None if direct_alpha else coverage, weights, direct_alpha,
                              linear, valid_channel)  # fmt: skip
@@ -362,11 +370,16 @@ def _area_with_guard(src, sgeo, to, size, guard, fill, samples, ring_samples, ro
     """Level 0 of the area filter with a guard ring (``guard`` pixels) or ``fill``, into ``out``
     (as :func:`kernels.resample_rows` fills it).
 
-    Every pixel with valid directions is the area filter's exact mean, made without the ring;
-    a guard (or filled) pixel holds what a GPU reads across the cell's edge: a bilinear tap of
+    Every pixel with valid directions is the area filter's exact mean, made without the ring
+    (a pixel across a disk's rim: the mean of its valid part). Around a whole-sphere layout a
+    guard (or filled) pixel holds what a GPU reads across the cell's edge: a bilinear tap of
     that area-filtered map at the continued direction of the pixel's centre (``ring_samples``
     1; a mip chain's ring takes the sub-samples a point-sampled chain would, its block means
     needing one weight rule). So the ring costs the map no energy and adds none of its own.
+    Around a partial view (``to.partial``) the ring is more of the view, where the map without
+    it has no data: each ring pixel is the area filter's exact mean over its own footprint
+    under the continued mapping (the grown image made by the area filter itself, on a
+    geometry whose inverse map reaches over the whole image), its weight that solid angle.
     ``linear``, ``valid_channel``: as :func:`kernels.resample_rows` takes them.
     """
     inner_geometry = kernel_geometry(to, size, 0)
@@ -380,16 +393,42 @@ def _area_with_guard(src, sgeo, to, size, guard, fill, samples, ring_samples, ro
         rot, False, inner, inner_coverage, inner_weights, zeroed=True, linear=linear,
         valid_channel=valid_channel,
     )  # fmt: skip
-    kernels.resample_rows(
-        inner, no_rips, 0, 0, inner_geometry, kernel_geometry(to, size, guard), 1.0, 1.0,
-        ring_samples, kernels.FILTER_BILINEAR, np.eye(3), fill, out, coverage, weights, zeroed=True,
-        coverage_channel=coverage_channel,
-    )  # fmt: skip
-    if weights is not None:
-        # The point kernel's weight is S x S times a density per unit (a, b) area, the area
-        # filter's a solid angle: the ring's are made solid angles too, for the block means.
-        weights *= 4.0 / (to.content_width(size) * size * ring_samples**2)
-    channels = src.shape[2]
+    if to.partial and ring_past_antipode(to, size, "fill" if fill else guard):
+        # A fisheye ring that reaches the point behind the view: the continued map folds the
+        # circle there onto that one direction and back, so a ring pixel has no footprint of
+        # its own. The ring is point-sampled from the source at each pixel's continued
+        # direction (as the bilinear kernel makes it); the view's pixels stay exact below.
+        kernels.resample_rows(
+            src, no_rips, 0, 0, sgeo, kernel_geometry(to, size, guard), 1.0, 1.0, ring_samples,
+            kernels.FILTER_BILINEAR, rot, fill, out, coverage, weights, zeroed=True,
+            coverage_channel=coverage_channel,
+        )  # fmt: skip
+        if weights is not None:
+            weights *= 4.0 / (to.content_width(size) * size * ring_samples**2)
+    elif to.partial:
+        kernels.resample_rows(
+            src, no_rips, 0, 0, sgeo, kernel_geometry(to, size, guard, output=True), 1.0, 1.0,
+            samples or 1, kernels.AREA_FILTER, rot, fill, out, coverage, weights, zeroed=True,
+            coverage_channel=coverage_channel, linear=linear, valid_channel=valid_channel,
+        )  # fmt: skip
+    else:
+        kernels.resample_rows(
+            inner, no_rips, 0, 0, inner_geometry, kernel_geometry(to, size, guard), 1.0, 1.0,
+            ring_samples, kernels.FILTER_BILINEAR, np.eye(3), fill, out, coverage, weights,
+            zeroed=True, coverage_channel=coverage_channel,
+        )  # fmt: skip
+        if weights is not None:
+            # The point kernel's weight is S x S times a density per unit (a, b) area, the area
+            # filter's a solid angle: the ring's are made solid angles too, for the block means.
+            weights *= 4.0 / (to.content_width(size) * size * ring_samples**2)
+    _paste_cells(to, size, guard, src.shape[2], inner, inner_coverage, inner_weights, out,
+                 coverage, weights, coverage_channel)  # fmt: skip
+
+
+def _paste_cells(to, size, guard, channels, inner, inner_coverage, inner_weights, out, coverage,
+                 weights, coverage_channel):  # fmt: skip
+    """Put the pixels of the ringless map ``inner`` that hold valid directions (with their
+    coverage and weights) into the cells of the guarded ``out``."""
     inner_w, inner_h = to.cell_size(size, 0)
     cell_w, cell_h = to.cell_size(size, guard)
     for cell in to.cells:
@@ -447,8 +486,9 @@ def memory_needed(envmap: EnvMap, to, size=None, guard=0, mips=None, alpha=False
     # The area filter's per-thread tables, edge memos and band buffers (measured: up to about
     # 8 MB a thread for a 2048 x 1024 source).
     scratch = AREA_SCRATCH * kernels.get_threads() if filter in (None, "area") else 0
-    if filter in (None, "area") and (guard == "fill" or guard_px) and not layout.partial:
-        # _area_with_guard's map without the ring: its pixels, coverage and weights.
+    if filter in (None, "area") and (guard == "fill" or guard_px):
+        # _area_with_guard's map without the ring: its pixels, coverage and weights (around a
+        # whole-sphere layout and around a view alike).
         width, height = layout.image_size(int(size), 0)
         scratch += width * height * (envmap.pixels.shape[2] + 2) * 4
     return memory.estimate_convert(envmap, layout, int(size), guard_px, chain, alpha, rips,

@@ -20,7 +20,7 @@ from ..layouts.geometry import horizon_pitch
 from ..limits import check_size as bounded_size
 from . import kernels
 
-__all__ = ["FILTERS", "choose_filter", "magnifies", "LINEAR_MAGNIFICATION", "rim_to_mirror_ball", "RIM_SOURCES", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
+__all__ = ["FILTERS", "choose_filter", "magnifies", "LINEAR_MAGNIFICATION", "ring_past_antipode", "rim_to_mirror_ball", "RIM_SOURCES", "MAX_SAMPLES", "ROUGHNESS_MAPPINGS", "default_size", "auto_samples",
            "check_samples", "check_guard", "check_mips", "check_conventions", "check_roughness",
            "output_channels", "check_size", "check_output", "output_layout"]  # fmt: skip
 
@@ -137,24 +137,38 @@ def auto_samples(source: EnvMap, to: Layout | str, size: int, level_scale: float
     return int(min(max(round(pitch_out / pitch_in), 1), MAX_SAMPLES))
 
 
-def choose_filter(source: EnvMap, guard, requested: str | None, to: Layout | None = None) -> str:
-    """The filter a conversion uses: ``requested``, or without one the area filter, except for
-    a guard ring around a partial view (an output ``to`` that is a view), which takes the
-    bilinear point kernel; UsageError when ``area`` is asked for there, or the name is unknown.
-    Everything else takes the area filter: a partial view as input (the part of a footprint
-    outside the view is a hole, :mod:`envconv.resample.partial`) and a guard ring around a
-    whole-sphere layout (its cells the area filter's, its ring what a GPU reads across their
-    edge: :func:`envconv.resample.convert.convert`)."""
+def choose_filter(requested: str | None) -> str:
+    """The filter a conversion uses: ``requested``, or without one the area filter; UsageError
+    for an unknown name.
+
+    The area filter takes every case: a partial view as input (the part of a footprint outside
+    the view is a hole, :mod:`envconv.resample.partial`); a guard ring around a whole-sphere
+    layout (its cells the area filter's, its ring what a GPU reads across their edge:
+    :func:`envconv.resample.convert.convert`); and a guard ring (or ``fill``) around a partial
+    view, whose ring pixels are more of the view: each the exact
+    mean over its own footprint under the continued mapping (the image plane extended, the
+    fisheye's radial formula continued), with alpha 0. Only a fisheye ring that reaches the
+    point behind the view (:func:`ring_past_antipode`) has no footprints of its own there: its
+    ring is point-sampled, the view's pixels still exact."""
     if requested is not None and requested not in FILTERS:
         raise UsageError(f"unknown filter {requested!r}; choose one of {', '.join(FILTERS)}")
-    reason = None
-    if guard not in (0, None) and to is not None and to.partial:
-        reason = "a guard ring around a partial view"
-    if requested is None:
-        return "bilinear" if reason else "area"
-    if requested == "area" and reason:
-        raise UsageError(f"the area filter does not take {reason} yet; use --filter bilinear")
-    return requested
+    return requested or "area"
+
+
+def ring_past_antipode(to: Layout, size: int | None, guard) -> bool:
+    """True when ``to`` is a partial fisheye whose guard ring (``guard`` pixels around size N,
+    or ``"fill"``: the square's corners, radius √2) reaches θ = 180°, the point behind its
+    view: there the continued map folds the whole circle onto that one direction and back, and
+    the area filter's footprints would not be the ring pixels' own. Without ``size`` a ring
+    of G pixels is taken to reach it (a size not known yet: the safe answer)."""
+    if guard in (0, None) or not to.partial or to.family != kernels.FAMILY_FISHEYE:
+        return False
+    if guard == "fill":
+        radius = math.sqrt(2.0)
+    else:
+        radius = math.inf if size is None else 1.0 + 2.0 * check_guard(guard) / size
+    half = float(to.params[0])
+    return half * radius >= math.pi
 
 
 #: Sources whose whole rim is one direction (−Z): the area filter cannot yet take them into a

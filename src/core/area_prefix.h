@@ -154,8 +154,12 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
             }
             double vp = py - mid, vq = qy - mid, vbar = 0.5 * (vp + vq);
             double uv = (up * (2.0 * vp + vq) + uq * (vp + 2.0 * vq)) * (1.0 / 6.0);
-            sum01 += ey * (m * (b01 + s01 * ubar) + g * (b01 * vbar + s01 * uv));
-            sum23 += ey * (m * (b23 + s23 * ubar) + g * (b23 * vbar + s23 * uv));
+            // ey (m (b + s ubar) + g (b vbar + s uv)) = b (em + eg vbar) + s (em ubar + eg uv):
+            // two scalar weights, then two products a pair.
+            const double em = ey * m, eg = ey * g;
+            const double wb = em + eg * vbar, ws = em * ubar + eg * uv;
+            sum01 += b01 * wb + s01 * ws;
+            sum23 += b23 * wb + s23 * ws;
             return;
         }
         if (!kGrad) {
