@@ -10,6 +10,7 @@
 //
 // Work is split into bands of kAreaTile output rows, each band into tiles (area_tiles.h).
 #include <algorithm>
+#include <mutex>
 #include <atomic>
 #include <cmath>
 #include <memory>
@@ -1176,16 +1177,37 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
     Singular sing = source_singular(cv);
     AreaJob job{cv, model, sing, out, samples, linear, valid_channel};
     int64_t bands = (out.height + kAreaTile - 1) / kAreaTile;
-    parallel_for(bands, threads, [&](int64_t band) {
-        SlowPath sp(cv, model, sing);
+    // A band's corner grid, tile scratch (prefix table, edge memo, density cache) and slope
+    // cache (2 MB) go back to a pool for the next band a thread takes, rather than being made
+    // afresh for each of a conversion's bands: a fresh process faulted their pages in again and
+    // again (the one shot's first call). The slopes cached stay valid: one model, one call.
+    struct Scratch {
+        CornerGrid grid;
+        TileScratch ts;
         std::unique_ptr<SlopeCache> slopes;
-        if (linear) slopes = std::make_unique<SlopeCache>(model, valid_channel);
-        sp.linear = slopes.get();
+    };
+    std::vector<std::unique_ptr<Scratch>> idle;
+    std::mutex idle_lock;
+    parallel_for(bands, threads, [&](int64_t band) {
+        std::unique_ptr<Scratch> scratch;
+        {
+            std::lock_guard<std::mutex> hold(idle_lock);
+            if (!idle.empty()) {
+                scratch = std::move(idle.back());
+                idle.pop_back();
+            }
+        }
+        if (!scratch) {
+            scratch = std::make_unique<Scratch>();
+            if (linear) scratch->slopes = std::make_unique<SlopeCache>(model, valid_channel);
+        }
+        SlowPath sp(cv, model, sing);
+        sp.linear = scratch->slopes.get();
         std::vector<double> acc(size_t(out.channels));
         PixelSums sums{acc.data(), out.channels, 0.0};
         sp.sums = &sums;
-        CornerGrid grid;
-        TileScratch ts;
+        CornerGrid& grid = scratch->grid;
+        TileScratch& ts = scratch->ts;
         int64_t j0 = band * kAreaTile, j1 = std::min(j0 + kAreaTile, out.height);
         if (samples > 1) {
             std::vector<float> buffer, weights;
@@ -1195,6 +1217,8 @@ void resample_area(const Image& src, const Conversion& cv, int samples, const Re
         }
         int64_t rows = std::min(kAreaTile, out.height - band * kAreaTile);
         if (progress) __atomic_add_fetch(progress, (rows + kTile - 1) / kTile, __ATOMIC_RELAXED);
+        std::lock_guard<std::mutex> hold(idle_lock);
+        idle.push_back(std::move(scratch));
     });
 }
 
