@@ -108,6 +108,25 @@ def test_peak_is_within_issue_15_bound_and_the_estimate(sources, out_name, resam
     assert measured <= estimate <= 2 * measured, (measured, estimate)
 
 
+@linux
+def test_a_magnifying_conversion_is_within_the_bound_too(sources):
+    """A conversion that magnifies (the 4096 × 2048 source into 3072 px cube faces: output
+    pixels a third of a texel's solid angle) takes the area filter's linear reconstruction,
+    whose slopes are made per texel in small per-thread tables, never as planes the size of the
+    source (two such planes would be 2 × the input against the bound's 0.25 × (input +
+    output) of room): its peak stays within issue 15's bound, and within the estimate."""
+    folder, tiny, mid = sources
+    source = envconv.read(mid)
+    resample = {"to": "cube-vcross", "size": 1536}
+    assert envconv.resample.options.magnifies(source, resample["to"], resample["size"])
+    warm, peak = _measure(folder, tiny, mid, "magnify.exr", resample)
+    read, written = _array_bytes(mid, folder / "magnify.exr")
+    measured = peak - warm
+    assert 0 < measured <= 1.25 * (read + written), (measured, read, written)
+    estimate = envconv.resample.convert.memory_needed(source, "cube-vcross", size=1536)
+    assert measured <= estimate <= 2 * measured, (measured, estimate)
+
+
 def test_blockwise_encoding_is_the_whole_image_encoding(monkeypatch):
     """Encoding a level in blocks of rows gives the codes and clip report of quantizing it
     whole (the dither noise follows the element index across blocks)."""
