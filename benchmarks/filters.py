@@ -69,7 +69,8 @@ def bench_oneshot(source: envconv.EnvMap, rounds: int = 24) -> None:
     """The whole one shot of issue 26: ``envconv convert`` of ``source`` written as a float zip
     EXR → cube-vcross 512 (zip), a fresh process each time, every case of ONESHOT_CASES once a
     round in a rotating order, the first round dropped. The two area labels run the same
-    filter: the gap between their medians is the machine's noise."""
+    filter: the gap between their medians is the machine's noise. Besides the medians, each
+    round's own ratio to the old default's run of that round: their median and quartiles."""
     import os
     import shutil
     import subprocess
@@ -95,10 +96,17 @@ def bench_oneshot(source: envconv.EnvMap, rounds: int = 24) -> None:
                 if r:
                     times[label].append(time.perf_counter() - start)
     medians = {label: statistics.median(t) for label, t in times.items()}
-    old = medians["--filter bilinear (old default)"]
+    base = times["--filter bilinear (old default)"]
+    old = statistics.median(base)
     print(f"one shot: envconv convert lat-long 2048x1024 float EXR -> cube-vcross 512, "
           f"{rounds} interleaved rounds")  # fmt: skip
     for label, median in medians.items():
+        # Each round's own ratio too: this project's machines drift in speed within minutes,
+        # and a round's three runs follow each other within two seconds.
+        ratios = sorted(t / b for t, b in zip(times[label], base, strict=True))
+        q1, q3 = ratios[len(ratios) // 4], ratios[(3 * len(ratios)) // 4]
         print(
-            f"  {label:32s} {median:7.3f} s   {100 * (median / old - 1):+6.1f} % over the old default"
+            f"  {label:32s} {median:7.3f} s   {100 * (median / old - 1):+6.1f} % over the old "
+            f"default (rounds: median {100 * (statistics.median(ratios) - 1):+.1f} %, "
+            f"quartiles {100 * (q1 - 1):+.1f} … {100 * (q3 - 1):+.1f} %)"
         )
