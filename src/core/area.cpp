@@ -331,17 +331,45 @@ struct TileScratch {
 // pixel rows one at a time, and a row that still does, its pixels one at a time.
 constexpr int64_t kMaxTableTexels = int64_t(1) << 16;
 
+// How a tile's edges are walked: through the box's prefix table (edge_integral, area_prefix.h)
+// or the linear reconstruction's (edge_integral_linear, area_linear_walk.h). grid_edge and
+// edge_pixels are the same for both.
+template <int NCH_, bool kGrad>
+struct BoxWalk {
+    static constexpr int NCH = NCH_;
+    using Table = PrefixTable;
+    static const Table& table(const TileScratch& ts) { return ts.table; }
+    static void edge(const Table& t, const SourceModel& model, int64_t row_base, double x0,
+                     double y0, int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1,
+                     int64_t iy1, double* out) {
+        edge_integral<NCH, kGrad>(t, model, row_base, x0, y0, ix0, iy0, x1, y1, ix1, iy1, out);
+    }
+};
+
+template <int NCH_, bool kGrad>
+struct LinearWalk {
+    static constexpr int NCH = NCH_;
+    using Table = LinearPrefixTable;
+    static const Table& table(const TileScratch& ts) { return ts.linear_table; }
+    static void edge(const Table& t, const SourceModel& model, int64_t row_base, double x0,
+                     double y0, int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1,
+                     int64_t iy1, double* out) {
+        edge_integral_linear<NCH, kGrad>(t, model, row_base, x0, y0, ix0, iy0, x1, y1, ix1, iy1,
+                                         out);
+    }
+};
+
 // Integral of the grid's edge from corner a to corner b through the tile's table, along its
 // polyline (count refinement points px, py) in a curved tile.
-template <int NCH, bool kGrad>
-void grid_edge(const AreaJob& job, const CornerGrid& g, const PrefixTable& t, int64_t row_base,
-               size_t a, size_t b, double* out, const double* px = nullptr,
+template <class Walk>
+void grid_edge(const AreaJob& job, const CornerGrid& g, const typename Walk::Table& t,
+               int64_t row_base, size_t a, size_t b, double* out, const double* px = nullptr,
                const double* py = nullptr, int count = 0) {
-    const int64_t nch = NCH ? NCH : t.nch;
+    const int64_t nch = Walk::NCH ? Walk::NCH : t.nch;
     for (int64_t c = 0; c <= nch; ++c) out[c] = 0.0;
     if (count == 0) {
-        edge_integral<NCH, kGrad>(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a],
-                                  g.x[b], g.y[b], g.fx[b], g.fy[b], out);
+        Walk::edge(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a], g.x[b], g.y[b],
+                   g.fx[b], g.fy[b], out);
         return;
     }
     double x0 = g.x[a], y0 = g.y[a];
@@ -349,7 +377,7 @@ void grid_edge(const AreaJob& job, const CornerGrid& g, const PrefixTable& t, in
     for (int k = 0; k <= count; ++k) {
         double x1 = k < count ? px[k] : g.x[b], y1 = k < count ? py[k] : g.y[b];
         int64_t fx1 = k < count ? floor_texel(x1) : g.fx[b], fy1 = k < count ? floor_texel(y1) : g.fy[b];
-        edge_integral<NCH, kGrad>(t, job.model, row_base, x0, y0, fx0, fy0, x1, y1, fx1, fy1, out);
+        Walk::edge(t, job.model, row_base, x0, y0, fx0, fy0, x1, y1, fx1, fy1, out);
         x0 = x1;
         y0 = y1;
         fx0 = fx1;
@@ -361,9 +389,11 @@ void grid_edge(const AreaJob& job, const CornerGrid& g, const PrefixTable& t, in
 // so that the walks of neighbouring edges overlap), then each direct pixel's sums from its
 // four edges: the loop (i, j) -> (i + 1, j) -> (i + 1, j + 1) -> (i, j + 1), top and right
 // edges as walked, bottom and left against their direction.
-template <int NCH, bool kGrad>
+template <class Walk>
 void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t row_base,
                  int j0, int j1) {
+    constexpr int NCH = Walk::NCH;
+    const typename Walk::Table& table = Walk::table(ts);
     EdgeMemo& e = ts.edges;
     const int64_t st = e.stride, nch = st - 1;
     const int w = g.w;
@@ -384,8 +414,8 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
             const double *px = nullptr, *py = nullptr;
             int count = 0;
             polyline(e.horizontal(i, j), px, py, count);
-            grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, j * cs + i + 1,
-                                  &e.hv[size_t(j * w + i) * st], px, py, count);
+            grid_edge<Walk>(job, g, table, row_base, j * cs + i, j * cs + i + 1,
+                            &e.hv[size_t(j * w + i) * st], px, py, count);
         }
     }
     for (int j = j0; j < j1; ++j) {
@@ -395,8 +425,8 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
             const double *px = nullptr, *py = nullptr;
             int count = 0;
             polyline(e.vertical(i, j), px, py, count);
-            grid_edge<NCH, kGrad>(job, g, ts.table, row_base, j * cs + i, (j + 1) * cs + i,
-                                  &e.vv[size_t(j * (w + 1) + i) * st], px, py, count);
+            grid_edge<Walk>(job, g, table, row_base, j * cs + i, (j + 1) * cs + i,
+                            &e.vv[size_t(j * (w + 1) + i) * st], px, py, count);
         }
     }
     for (int j = j0; j < j1; ++j) {
@@ -415,105 +445,24 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
 
 using EdgePixels = void (*)(const AreaJob&, const CornerGrid&, TileScratch&, int64_t, int, int);
 
-EdgePixels edge_pixels_for(bool grad, int64_t nch) {
-    if (grad) return nch == 3 ? edge_pixels<3, true> : nch == 4 ? edge_pixels<4, true> : edge_pixels<0, true>;
-    return nch == 3 ? edge_pixels<3, false> : nch == 4 ? edge_pixels<4, false> : edge_pixels<0, false>;
+// edge_pixels for the tile's walk (linear: the linear reconstruction's), its rows' density
+// model (grad) and channel count.
+template <template <int, bool> class Walk>
+EdgePixels edge_pixels_of(bool grad, int64_t nch) {
+    if (grad) {
+        return nch == 3   ? edge_pixels<Walk<3, true>>
+               : nch == 4 ? edge_pixels<Walk<4, true>>
+                          : edge_pixels<Walk<0, true>>;
+    }
+    return nch == 3   ? edge_pixels<Walk<3, false>>
+           : nch == 4 ? edge_pixels<Walk<4, false>>
+                      : edge_pixels<Walk<0, false>>;
 }
 
-// grid_edge and edge_pixels for the linear reconstruction (area_linear_walk.h): the same
-// walks through the tile's linear table.
-
-// Integral of the grid's edge from corner a to corner b through the tile's table, along its
-// polyline (count refinement points px, py) in a curved tile.
-template <int NCH, bool kGrad>
-void grid_edge_linear(const AreaJob& job, const CornerGrid& g, const LinearPrefixTable& t, int64_t row_base,
-               size_t a, size_t b, double* out, const double* px = nullptr,
-               const double* py = nullptr, int count = 0) {
-    const int64_t nch = NCH ? NCH : t.nch;
-    for (int64_t c = 0; c <= nch; ++c) out[c] = 0.0;
-    if (count == 0) {
-        edge_integral_linear<NCH, kGrad>(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a],
-                                  g.x[b], g.y[b], g.fx[b], g.fy[b], out);
-        return;
-    }
-    double x0 = g.x[a], y0 = g.y[a];
-    int64_t fx0 = g.fx[a], fy0 = g.fy[a];
-    for (int k = 0; k <= count; ++k) {
-        double x1 = k < count ? px[k] : g.x[b], y1 = k < count ? py[k] : g.y[b];
-        int64_t fx1 = k < count ? floor_texel(x1) : g.fx[b], fy1 = k < count ? floor_texel(y1) : g.fy[b];
-        edge_integral_linear<NCH, kGrad>(t, job.model, row_base, x0, y0, fx0, fy0, x1, y1, fx1, fy1, out);
-        x0 = x1;
-        y0 = y1;
-        fx0 = fx1;
-        fy0 = fy1;
-    }
-}
-
-// Integrate every edge of the direct pixels of rows [j0, j1) of the tile (independent loops,
-// so that the walks of neighbouring edges overlap), then each direct pixel's sums from its
-// four edges: the loop (i, j) -> (i + 1, j) -> (i + 1, j + 1) -> (i, j + 1), top and right
-// edges as walked, bottom and left against their direction.
-template <int NCH, bool kGrad>
-void edge_pixels_linear(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t row_base,
-                 int j0, int j1) {
-    EdgeMemo& e = ts.edges;
-    const int64_t st = e.stride, nch = st - 1;
-    const int w = g.w;
-    const size_t cs = size_t(w + 1);  // corners per grid row
-    const char* dir = ts.direct.data();
-    // A curved tile's edges run along their polylines.
-    auto polyline = [&](size_t index, const double*& px, const double*& py, int& count) {
-        if (!ts.curved) return;
-        px = e.px.data() + e.first[index];
-        py = e.py.data() + e.first[index];
-        count = e.first[index + 1] - e.first[index];
-    };
-    for (int j = j0; j <= j1; ++j) {
-        const char* above = j > j0 ? dir + (j - 1) * w : nullptr;
-        const char* below = j < j1 ? dir + j * w : nullptr;
-        for (int i = 0; i < w; ++i) {
-            if (!((above && above[i]) || (below && below[i]))) continue;
-            const double *px = nullptr, *py = nullptr;
-            int count = 0;
-            polyline(e.horizontal(i, j), px, py, count);
-            grid_edge_linear<NCH, kGrad>(job, g, ts.linear_table, row_base, j * cs + i, j * cs + i + 1,
-                                  &e.hv[size_t(j * w + i) * st], px, py, count);
-        }
-    }
-    for (int j = j0; j < j1; ++j) {
-        const char* row = dir + j * w;
-        for (int i = 0; i <= w; ++i) {
-            if (!((i > 0 && row[i - 1]) || (i < w && row[i]))) continue;
-            const double *px = nullptr, *py = nullptr;
-            int count = 0;
-            polyline(e.vertical(i, j), px, py, count);
-            grid_edge_linear<NCH, kGrad>(job, g, ts.linear_table, row_base, j * cs + i, (j + 1) * cs + i,
-                                  &e.vv[size_t(j * (w + 1) + i) * st], px, py, count);
-        }
-    }
-    for (int j = j0; j < j1; ++j) {
-        const char* row = dir + j * w;
-        for (int i = 0; i < w; ++i) {
-            if (!row[i]) continue;
-            const double* tp = &e.hv[size_t(j * w + i) * st];
-            const double* bt = &e.hv[size_t((j + 1) * w + i) * st];
-            const double* lf = &e.vv[size_t(j * (w + 1) + i) * st];
-            const double* rt = lf + st;
-            double* sum = &e.pixel[size_t(j * w + i) * st];
-            for (int64_t c = 0; c <= (NCH ? NCH : nch); ++c) sum[c] = tp[c] + rt[c] - bt[c] - lf[c];
-        }
-    }
-}
+EdgePixels edge_pixels_for(bool grad, int64_t nch) { return edge_pixels_of<BoxWalk>(grad, nch); }
 
 EdgePixels edge_pixels_linear_for(bool grad, int64_t nch) {
-    if (grad) {
-        return nch == 3   ? edge_pixels_linear<3, true>
-               : nch == 4 ? edge_pixels_linear<4, true>
-                          : edge_pixels_linear<0, true>;
-    }
-    return nch == 3   ? edge_pixels_linear<3, false>
-           : nch == 4 ? edge_pixels_linear<4, false>
-                      : edge_pixels_linear<0, false>;
+    return edge_pixels_of<LinearWalk>(grad, nch);
 }
 
 // The box of the corners of the direct pixels of rows [j0, j1) of the tile (empty, xmin >
