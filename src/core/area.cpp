@@ -562,13 +562,13 @@ void side_paths(const CornerGrid& g, TileScratch& ts, int i, int j, bool usable)
         s.px.clear();
         s.py.clear();
         s.mode = usable ? 0 : 1;
+        s.cell = g.ref_cell;  // where the tile decided the side (a chord is one there only)
         if (!usable || !ts.curved || e.refine[index[k]] == 0) continue;
         if (e.refine[index[k]] < 0) {
             s.mode = 1;
             continue;
         }
         s.mode = 2;
-        s.cell = g.ref_cell;
         s.x0 = g.x[start[k]];
         s.y0 = g.y[start[k]];
         int32_t a = e.first[index[k]], b = e.first[index[k] + 1];

@@ -173,7 +173,11 @@ bool image_straight(double x0, double y0, double x1, double y1, double mx, doubl
 // refines as it does in the direct path), arcs by their angle the same way.
 bool refine_edge(SlowPath& sp, const Piece& p, int k, int64_t cell, double t0, double x0,
                  double y0, double t1, double x1, double y1, int depth) {
-    if (p.v[k].chord) return true;
+    // The tile's chord holds in the tile's source cell only: in another cell's chart the same
+    // side may bend (a tennisball tile whose reference band folds near its pole gave pixels of
+    // the other band up to 180 times their solid angle through chords kept there).
+    if (p.v[k].chord && p.v[k].side >= 0 && sp.sides && sp.sides[p.v[k].side].cell == cell)
+        return true;
     const double tol = p.v[k].fold ? 0.25 * kChordTol : kChordTol;
     if (!p.v[k].arc) {
         double ox0, oy0, ox1, oy1;
@@ -339,6 +343,65 @@ bool side_path(SlowPath& sp, const Piece& p, int k, int64_t cell, double x, doub
     return true;
 }
 
+// Refine the cut from output point (ox0, oy0) to (ox1, oy1) of output cell `ocell`, whose ends
+// lie on a source seam (their images in source cell `cell`: (x0, y0) and (x1, y1)), along the
+// seam: the point where the seam crosses the cut's perpendicular bisector (by bisection on the
+// source cell, within half the cut's length either side) is inserted wherever its image strays
+// from the chord by more than kChordTol output pixels, and both halves are refined again.
+// Where the bisector meets no change of cell, the chord stays. False when a point has no image
+// in `cell`.
+bool refine_seam(SlowPath& sp, int64_t ocell, double ox0, double oy0, double ox1, double oy1,
+                 int64_t cell, double x0, double y0, double x1, double y1, int depth) {
+    if (depth >= kMaxRefine) return true;
+    const Conversion& cv = sp.cv;
+    const double len = std::hypot(ox1 - ox0, oy1 - oy0);
+    if (!(len > 0.0)) return true;
+    const double nx = -(oy1 - oy0) / len, ny = (ox1 - ox0) / len, reach = 0.5 * len;
+    const double cx = 0.5 * (ox0 + ox1), cy = 0.5 * (oy0 + oy1);
+    auto cell_at = [&](double t) {
+        return source_cell(cv.src, output_direction(cv, ocell, cx + t * nx, cy + t * ny));
+    };
+    double lo = -reach, hi = reach;
+    const int64_t c_lo = cell_at(lo);
+    if (cell_at(hi) == c_lo) return true;
+    for (int it = 0; it < 52; ++it) {
+        const double t = 0.5 * (lo + hi);
+        (cell_at(t) == c_lo ? lo : hi) = t;
+    }
+    const double t = 0.5 * (lo + hi), ox = cx + t * nx, oy = cy + t * ny, h = 1e-3;
+    double mx, my, qx, qy;
+    if (!continued_point(cv.src, cell, output_direction(cv, ocell, ox, oy), 0.5 * (x0 + x1),
+                         0.5 * (y0 + y1), mx, my))
+        return false;
+    if (!continued_point(cv.src, cell, output_direction(cv, ocell, ox + h * nx, oy + h * ny), mx,
+                         my, qx, qy))
+        return false;
+    if (image_straight(x0, y0, x1, y1, mx, my, qx, qy, h, kChordTol)) return true;
+    if (!refine_seam(sp, ocell, ox0, oy0, ox, oy, cell, x0, y0, mx, my, depth + 1)) return false;
+    sp.xs.push_back(mx);
+    sp.ys.push_back(my);
+    return refine_seam(sp, ocell, ox, oy, ox1, oy1, cell, mx, my, x1, y1, depth + 1);
+}
+
+// True when edge k of the piece runs along the rim of a paraboloid source's half `cell`: its
+// ends' images (x0, y0) and (x1, y1) there and the image of its midpoint all lie on the rim
+// (within 1e-9 of its radius). The rim is the seam between the halves.
+bool on_paraboloid_rim(const SlowPath& sp, const Piece& p, int k, int64_t cell, double x0,
+                       double y0, double x1, double y1) {
+    const Geometry& g = sp.cv.src;
+    if (g.family != kParaboloid) return false;
+    double cx, cy, unit;
+    cell_disk(g, cell, cx, cy, unit);
+    auto on_rim = [&](double x, double y) {
+        return std::fabs(std::hypot(x - cx, y - cy) - unit) <= 1e-9 * unit;
+    };
+    if (!on_rim(x0, y0) || !on_rim(x1, y1)) return false;
+    double ox, oy, mx, my;
+    edge_point(p, k, 0.5, ox, oy);
+    Vec3 d = output_direction(sp.cv, p.cell, ox, oy);
+    return continued_point(g, cell, d, 0.5 * (x0 + x1), 0.5 * (y0 + y1), mx, my) && on_rim(mx, my);
+}
+
 // The reference for the vertex after cone vertex k: every point and its copy turned by half
 // a turn about the cone point lie equally far from it, so the next vertex cannot be placed
 // near the cone's image. Probes inside the piece close to the cone, swept in eight steps from
@@ -413,9 +476,25 @@ bool build_footprint(SlowPath& sp, const Piece& p, const VertexFacts& f, int64_t
             if (!vertex_image(sp, p, f, next, cell, ref_x, ref_y, nx, ny)) return false;
             // An edge between two vertices on one cone point (a rim arc over it) is that point.
             const bool collapsed = p.v[k].cone >= 0 && p.v[next].cone == p.v[k].cone;
-            if (!p.v[k].seam && !collapsed && !side_path(sp, p, k, cell, x, y) &&
-                !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0))
+            if ((p.v[k].seam && sp.cv.src.family == kParaboloid) ||
+                on_paraboloid_rim(sp, p, k, cell, x, y, nx, ny)) {
+                // A cut between a paraboloid's halves, or a side of the pixel along it, runs
+                // along their shared rim, a circle in either half, not along a chord or the
+                // tile's parabola: the chord left a circular segment of the other half inside
+                // the footprint (a pixel whose side lay on the rim took up to 15 % of its
+                // colour from the other half; the parabola, 0.25 %).
+                append_rim_arc(sp, cell, x, y, 0.5 * (x + nx), 0.5 * (y + ny), nx, ny);
+            } else if (p.v[k].seam && sp.cv.src.family == kTennisball) {
+                // Where a tennisball's bands meet, the seam is curved in either band: the cut
+                // follows it (a pixel across it took up to 1.2 % of its solid angle from the
+                // wrong band along the chord).
+                if (!refine_seam(sp, p.cell, p.v[k].x, p.v[k].y, p.v[next].x, p.v[next].y, cell, x,
+                                 y, nx, ny, 0))
+                    return false;
+            } else if (!p.v[k].seam && !collapsed && !side_path(sp, p, k, cell, x, y) &&
+                       !refine_edge(sp, p, k, cell, 0.0, x, y, 1.0, nx, ny, 0)) {
                 return false;
+            }
             // After a cone the next vertex keeps the point placed here (near the probe); the
             // points after it are not ambiguous.
             placed = p.v[k].cone >= 0;

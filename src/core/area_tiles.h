@@ -231,6 +231,34 @@ inline double grid_bend(const CornerGrid& g) {
     return worst / 8.0;
 }
 
+// True when a tennisball grid's boundary reaches within 22.5 deg of a pole of its reference
+// band's chart (|theta| > 67.5 deg, far past what the band owns): around that pole the band's
+// continued coordinates no longer follow the sphere, and a tile of a small output can hold one
+// (measured: a 32 px tennisball into a 42 x 21 lat-long, whose first tile spans the image's
+// left 265 deg, gave pixels up to 180 times their solid angle through its Coons interior and
+// polylines). Such a grid is not usable: its pixels take the general path, each in its owner's
+// chart. (Only the boundary is mapped when this is asked; a pole inside it would break the
+// check of its far corner.)
+inline bool near_band_pole(const Geometry& s, const CornerGrid& g) {
+    if (s.family != kTennisball) return false;
+    const int64_t st = g.w + 1;
+    double worst = 0.0;
+    auto check = [&](size_t k) {
+        double a, b;
+        cell_local(s, g.ref_cell, g.x[k], g.y[k], a, b);
+        worst = std::max(worst, std::fabs(b));  // b: theta over 45 deg
+    };
+    for (int i = 0; i <= g.w; ++i) {
+        check(size_t(i));
+        check(size_t(g.h * st + i));
+    }
+    for (int j = 1; j < g.h; ++j) {
+        check(size_t(j * st));
+        check(size_t(j * st + g.w));
+    }
+    return worst > 1.5;
+}
+
 // The corner grid of the w x h pixels from (i0, j0) of output cell `cell`. Every corner gets
 // its canonical point (exact, or interpolated inside); usable tells whether all of them could
 // be expressed in one source cell for the direct path. `left`, when not null, holds the exact
@@ -273,7 +301,7 @@ inline void map_grid(const Conversion& cv, int64_t cell, int64_t i0, int64_t j0,
     g.usable = g.usable && line_to_reference(cv, g, 0, 0, 0, 1, h) &&
                line_to_reference(cv, g, 0, h, 1, 0, w) &&
                std::hypot(g.x[g.at(w, h)] - far_x, g.y[g.at(w, h)] - far_y) < 1e-6 * (1.0 + std::fabs(far_x)) &&
-               fill_grid(cv, cell, g, 0, 0, w, h, tol);
+               !near_band_pole(cv.src, g) && fill_grid(cv, cell, g, 0, 0, w, h, tol);
     if (!g.usable) {  // every corner exact, for the general path
         for (int j = 1; j < h; ++j)
             for (int i = 1; i < w; ++i) map_exact(cv, cell, g, i, j);
