@@ -801,13 +801,10 @@ bool refine_segment(const Conversion& cv, const Singular& sing, int64_t ocell, d
 void slow_rect_pieces(SlowPath& sp, double x0, double y0, double x1, double y1,
                       const SourcePoint* corners, const SidePath* sides);
 
-// The output pieces of the rectangle [x0, x1] x [y0, y1] (level-0 output pixels) in every
-// output cell it meets, as slow_rect_pieces takes them (a disk cell's clipped to its readable
-// circle unless `whole`), passed to visit(piece).
+// Every output cell that the rectangle [x0, x1] x [y0, y1] (level-0 output pixels) meets,
+// with the rectangle's part in it: visit(cell, ax, ay, bx, by).
 template <class Visit>
-void output_pieces(const SlowPath& sp, double x0, double y0, double x1, double y1, bool whole,
-                   Visit&& visit) {
-    const Geometry& d = sp.cv.dst;
+void rect_cells(const Geometry& d, double x0, double y0, double x1, double y1, Visit&& visit) {
     const double cw = double(d.cell_width()), ch = double(d.cell_height());
     int64_t col0 = std::max<int64_t>(0, floor_index(x0 / cw));
     int64_t col1 = std::min<int64_t>(d.columns - 1, floor_index(std::nextafter(x1, x0) / cw));
@@ -815,29 +812,35 @@ void output_pieces(const SlowPath& sp, double x0, double y0, double x1, double y
     int64_t row1 = std::min<int64_t>(d.rows - 1, floor_index(std::nextafter(y1, y0) / ch));
     for (int64_t row = row0; row <= row1; ++row) {
         for (int64_t col = col0; col <= col1; ++col) {
-            int64_t cell = row * d.columns + col;
             double ax = std::max(x0, double(col) * cw), bx = std::min(x1, double(col + 1) * cw);
             double ay = std::max(y0, double(row) * ch), by = std::min(y1, double(row + 1) * ch);
-            if (!(bx > ax && by > ay)) continue;
-            if (d.cell_face[cell] < 0) {
-                if (sp.cv.fill)
-                    visit(rect_piece(nearest_cell(d, 0.5 * (ax + bx), 0.5 * (ay + by)), ax, ay, bx, by, nullptr, nullptr));
-            } else if (d.disk()) {
-                if (sp.cv.fill || whole) {
-                    visit(rect_piece(cell, ax, ay, bx, by, nullptr, nullptr));
-                } else {
-                    double cx, cy, unit;
-                    cell_disk(d, cell, cx, cy, unit);
-                    Piece p;
-                    p.cell = cell;
-                    clip_square_to_circle(ax, ay, bx, by, cx, cy, unit + double(d.guard), p);
-                    if (p.n > 0) visit(p);
-                }
-            } else {
-                visit(rect_piece(cell, ax, ay, bx, by, nullptr, nullptr));
-            }
+            if (bx > ax && by > ay) visit(row * d.columns + col, ax, ay, bx, by);
         }
     }
+}
+
+// The output pieces of the rectangle [x0, x1] x [y0, y1] in every output cell it meets, as
+// slow_rect_pieces takes them (a disk cell's clipped to its readable circle unless `whole`),
+// passed to visit(piece).
+template <class Visit>
+void output_pieces(const SlowPath& sp, double x0, double y0, double x1, double y1, bool whole,
+                   Visit&& visit) {
+    const Geometry& d = sp.cv.dst;
+    rect_cells(d, x0, y0, x1, y1, [&](int64_t cell, double ax, double ay, double bx, double by) {
+        if (d.cell_face[cell] < 0) {
+            if (sp.cv.fill)
+                visit(rect_piece(nearest_cell(d, 0.5 * (ax + bx), 0.5 * (ay + by)), ax, ay, bx, by, nullptr, nullptr));
+        } else if (d.disk() && !sp.cv.fill && !whole) {
+            double cx, cy, unit;
+            cell_disk(d, cell, cx, cy, unit);
+            Piece p;
+            p.cell = cell;
+            clip_square_to_circle(ax, ay, bx, by, cx, cy, unit + double(d.guard), p);
+            if (p.n > 0) visit(p);
+        } else {
+            visit(rect_piece(cell, ax, ay, bx, by, nullptr, nullptr));
+        }
+    });
 }
 
 // A last check of the general path: the footprints it built for the rectangle must hold the
@@ -903,36 +906,25 @@ void slow_rect_pieces(SlowPath& sp, double x0, double y0, double x1, double y1,
         sp.side_y[k][1] = cy[(k + 1) % 4];
     }
     const Geometry& d = sp.cv.dst;
-    const double cw = double(d.cell_width()), ch = double(d.cell_height());
     const double pixel[4] = {x0, y0, x1, y1};
-    int64_t col0 = std::max<int64_t>(0, floor_index(x0 / cw));
-    int64_t col1 = std::min<int64_t>(d.columns - 1, floor_index(std::nextafter(x1, x0) / cw));
-    int64_t row0 = std::max<int64_t>(0, floor_index(y0 / ch));
-    int64_t row1 = std::min<int64_t>(d.rows - 1, floor_index(std::nextafter(y1, y0) / ch));
-    for (int64_t row = row0; row <= row1; ++row) {
-        for (int64_t col = col0; col <= col1; ++col) {
-            int64_t cell = row * d.columns + col;
-            double ax = std::max(x0, double(col) * cw), bx = std::min(x1, double(col + 1) * cw);
-            double ay = std::max(y0, double(row) * ch), by = std::min(y1, double(row + 1) * ch);
-            if (!(bx > ax && by > ay)) continue;
-            if (d.cell_face[cell] < 0) {
-                if (!sp.cv.fill) continue;
-                // An empty cell under --guard fill: its nearest face's continued mapping.
-                int64_t near = nearest_cell(d, 0.5 * (ax + bx), 0.5 * (ay + by));
-                Piece p = rect_piece(near, ax, ay, bx, by, nullptr, nullptr);
-                process_piece(sp, p, 0);
-            } else if (d.disk()) {
-                disk_pieces(sp, cell, ax, ay, bx, by);
-            } else {
-                Piece p = rect_piece(cell, ax, ay, bx, by, corners, pixel);
-                bool fold[4];
-                const bool whole = ax == x0 && ay == y0 && bx == x1 && by == y1;
-                fold_sides(sp, cell, ax, ay, bx, by, whole ? corners : nullptr, fold);
-                mark_sides(p, ax, ay, bx, by, fold, whole ? sides : nullptr);
-                process_piece(sp, p, 0);
-            }
+    rect_cells(d, x0, y0, x1, y1, [&](int64_t cell, double ax, double ay, double bx, double by) {
+        if (d.cell_face[cell] < 0) {
+            if (!sp.cv.fill) return;
+            // An empty cell under --guard fill: its nearest face's continued mapping.
+            int64_t near = nearest_cell(d, 0.5 * (ax + bx), 0.5 * (ay + by));
+            Piece p = rect_piece(near, ax, ay, bx, by, nullptr, nullptr);
+            process_piece(sp, p, 0);
+        } else if (d.disk()) {
+            disk_pieces(sp, cell, ax, ay, bx, by);
+        } else {
+            Piece p = rect_piece(cell, ax, ay, bx, by, corners, pixel);
+            bool fold[4];
+            const bool whole = ax == x0 && ay == y0 && bx == x1 && by == y1;
+            fold_sides(sp, cell, ax, ay, bx, by, whole ? corners : nullptr, fold);
+            mark_sides(p, ax, ay, bx, by, fold, whole ? sides : nullptr);
+            process_piece(sp, p, 0);
         }
-    }
+    });
 }
 
 }  // namespace envconv
