@@ -344,6 +344,14 @@ struct BoxWalk {
                      int64_t iy1, double* out) {
         edge_integral<NCH, kGrad>(t, model, row_base, x0, y0, ix0, iy0, x1, y1, ix1, iy1, out);
     }
+    // A parabola edge in one walk: its chord and the sliver between them (edge_integral).
+    static constexpr bool kBows = true;
+    static void bowed(const Table& t, const SourceModel& model, int64_t row_base, double x0,
+                      double y0, int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1,
+                      int64_t iy1, double* out, double bow) {
+        edge_integral<NCH, kGrad, true>(t, model, row_base, x0, y0, ix0, iy0, x1, y1, ix1, iy1,
+                                        out, bow);
+    }
 };
 
 template <int NCH_, bool kGrad>
@@ -357,16 +365,65 @@ struct LinearWalk {
         edge_integral_linear<NCH, kGrad>(t, model, row_base, x0, y0, ix0, iy0, x1, y1, ix1, iy1,
                                          out);
     }
+    // The linear reconstruction's value varies across a texel: its parabolas go as polylines.
+    static constexpr bool kBows = false;
+    static void bowed(const Table&, const SourceModel&, int64_t, double, double, int64_t, int64_t,
+                      double, double, int64_t, int64_t, double*, double) {}
 };
 
+// How many points edge `index` of a curved tile runs through between its corners.
+int edge_point_count(const EdgeMemo& e, size_t index) {
+    const signed char r = e.refine[index];
+    return r == 2 ? 1 : r == 3 ? 3 : r == 1 ? e.first[index + 1] - e.first[index] : 0;
+}
+
+// Point q of edge `index` (corners a to b), from a: refine_segment's, or the parabola's
+// P(t) = Pa + t (Pb - Pa) + t (t - 1) D / 2 at t = (q + 1) / (count + 1).
+void edge_point(const CornerGrid& g, const EdgeMemo& e, size_t index, size_t a, size_t b, int q,
+                double& x, double& y) {
+    const signed char r = e.refine[index];
+    if (r == 1) {
+        x = e.px[size_t(e.first[index] + q)];
+        y = e.py[size_t(e.first[index] + q)];
+        return;
+    }
+    const double t = r == 2 ? 0.5 : 0.25 * double(q + 1);
+    x = g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * e.dx[index];
+    y = g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * e.dy[index];
+}
+
+// Call f(x, y) for every point of every edge of a curved tile (refined and parabola edges).
+template <class F>
+void each_edge_point(const CornerGrid& g, const EdgeMemo& e, F&& f) {
+    for (size_t k = 0; k < e.px.size(); ++k) f(e.px[k], e.py[k]);
+    auto parabola = [&](size_t index, size_t a, size_t b) {
+        if (e.refine[index] < 2) return;
+        for (int q = 0, n = edge_point_count(e, index); q < n; ++q) {
+            double x, y;
+            edge_point(g, e, index, a, b, q, x, y);
+            f(x, y);
+        }
+    };
+    for (int j = 0; j <= g.h; ++j)
+        for (int i = 0; i < g.w; ++i) parabola(e.horizontal(i, j), g.at(i, j), g.at(i + 1, j));
+    for (int j = 0; j < g.h; ++j)
+        for (int i = 0; i <= g.w; ++i) parabola(e.vertical(i, j), g.at(i, j), g.at(i, j + 1));
+}
+
 // Integral of the grid's edge from corner a to corner b through the tile's table, along its
-// polyline (count refinement points px, py) in a curved tile.
+// polyline (count refinement points px, py) in a curved tile, or (bow not 0) the parabola
+// about its chord that edge_integral's bow describes.
 template <class Walk>
 void grid_edge(const AreaJob& job, const CornerGrid& g, const typename Walk::Table& t,
                int64_t row_base, size_t a, size_t b, double* out, const double* px = nullptr,
-               const double* py = nullptr, int count = 0) {
+               const double* py = nullptr, int count = 0, double bow = 0.0) {
     const int64_t nch = Walk::NCH ? Walk::NCH : t.nch;
     for (int64_t c = 0; c <= nch; ++c) out[c] = 0.0;
+    if (bow != 0.0) {
+        Walk::bowed(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a], g.x[b], g.y[b],
+                    g.fx[b], g.fy[b], out, bow);
+        return;
+    }
     if (count == 0) {
         Walk::edge(t, job.model, row_base, g.x[a], g.y[a], g.fx[a], g.fy[a], g.x[b], g.y[b],
                    g.fx[b], g.fy[b], out);
@@ -399,9 +456,21 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
     const int w = g.w;
     const size_t cs = size_t(w + 1);  // corners per grid row
     const char* dir = ts.direct.data();
-    // A curved tile's edges run along their polylines.
-    auto polyline = [&](size_t index, const double*& px, const double*& py, int& count) {
+    // A curved tile's edges run along their polylines, or as bowed chords where the grid gave
+    // them a parabola (the polyline's points then serve the general path only).
+    double parabola_x[3], parabola_y[3];
+    auto polyline = [&](size_t index, size_t a, size_t b, const double*& px, const double*& py,
+                        int& count, double& bow) {
         if (!ts.curved) return;
+        if (e.refine[index] >= 2) {
+            bow = Walk::kBows ? e.bow[index] : 0.0;
+            if (bow != 0.0) return;
+            count = edge_point_count(e, index);
+            for (int q = 0; q < count; ++q) edge_point(g, e, index, a, b, q, parabola_x[q], parabola_y[q]);
+            px = parabola_x;
+            py = parabola_y;
+            return;
+        }
         px = e.px.data() + e.first[index];
         py = e.py.data() + e.first[index];
         count = e.first[index + 1] - e.first[index];
@@ -413,9 +482,10 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
             if (!((above && above[i]) || (below && below[i]))) continue;
             const double *px = nullptr, *py = nullptr;
             int count = 0;
-            polyline(e.horizontal(i, j), px, py, count);
+            double bow = 0.0;
+            polyline(e.horizontal(i, j), j * cs + i, j * cs + i + 1, px, py, count, bow);
             grid_edge<Walk>(job, g, table, row_base, j * cs + i, j * cs + i + 1,
-                            &e.hv[size_t(j * w + i) * st], px, py, count);
+                            &e.hv[size_t(j * w + i) * st], px, py, count, bow);
         }
     }
     for (int j = j0; j < j1; ++j) {
@@ -424,9 +494,10 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
             if (!((i > 0 && row[i - 1]) || (i < w && row[i]))) continue;
             const double *px = nullptr, *py = nullptr;
             int count = 0;
-            polyline(e.vertical(i, j), px, py, count);
+            double bow = 0.0;
+            polyline(e.vertical(i, j), j * cs + i, (j + 1) * cs + i, px, py, count, bow);
             grid_edge<Walk>(job, g, table, row_base, j * cs + i, (j + 1) * cs + i,
-                            &e.vv[size_t(j * (w + 1) + i) * st], px, py, count);
+                            &e.vv[size_t(j * (w + 1) + i) * st], px, py, count, bow);
         }
     }
     for (int j = j0; j < j1; ++j) {
@@ -505,13 +576,19 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
         direct_corner_box(g, ts, j0, j1, xmin, xmax, ymin, ymax);
     }
     if (xmin > xmax) return false;
-    if (ts.curved) {  // a curved tile's polylines may bulge past their corners
-        for (size_t k = 0; k < ts.edges.px.size(); ++k) {
-            xmin = std::min(xmin, ts.edges.px[k]);
-            xmax = std::max(xmax, ts.edges.px[k]);
-            ymin = std::min(ymin, ts.edges.py[k]);
-            ymax = std::max(ymax, ts.edges.py[k]);
-        }
+    // A curved tile's polylines may bulge past their corners. (Its parabola edges do too, but
+    // the box's walk takes them as bowed chords, which stay between their corners; the linear
+    // reconstruction's walks them as polylines.)
+    auto extend = [&](double x, double y) {
+        xmin = std::min(xmin, x);
+        xmax = std::max(xmax, x);
+        ymin = std::min(ymin, y);
+        ymax = std::max(ymax, y);
+    };
+    if (ts.curved && slopes) {
+        each_edge_point(g, ts.edges, extend);
+    } else if (ts.curved) {
+        for (size_t k = 0; k < ts.edges.px.size(); ++k) extend(ts.edges.px[k], ts.edges.py[k]);
     }
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax), r0 = floor_texel(ymin), r1 = floor_texel(ymax);
     if ((c1 - c0 + 1) * (r1 - r0 + 1) > kMaxTableTexels) return false;
@@ -571,11 +648,13 @@ void side_paths(const CornerGrid& g, TileScratch& ts, int i, int j, bool usable)
         s.mode = 2;
         s.x0 = g.x[start[k]];
         s.y0 = g.y[start[k]];
-        int32_t a = e.first[index[k]], b = e.first[index[k] + 1];
-        for (int32_t m = 0; m < b - a; ++m) {
-            int32_t q = k >= 2 ? b - 1 - m : a + m;  // the bottom and left sides run backwards
-            s.px.push_back(e.px[size_t(q)]);
-            s.py.push_back(e.py[size_t(q)]);
+        // The bottom and left sides run against their edges (from corner b to a).
+        const size_t a = k >= 2 ? start[(k + 1) % 4] : start[k], b = k >= 2 ? start[k] : start[k + 1];
+        for (int m = 0, n = edge_point_count(e, index[k]); m < n; ++m) {
+            double x, y;
+            edge_point(g, e, index[k], a, b, k >= 2 ? n - 1 - m : m, x, y);
+            s.px.push_back(x);
+            s.py.push_back(y);
         }
     }
 }
@@ -588,21 +667,23 @@ void pixel_polygon(const CornerGrid& g, const TileScratch& ts, int i, int j,
     const EdgeMemo& e = ts.edges;
     xs.clear();
     ys.clear();
-    auto side = [&](size_t corner, size_t index, bool reverse) {
+    // From `corner` along edge `index` (corners a to b, walked backwards when reverse).
+    auto side = [&](size_t corner, size_t index, size_t a, size_t b, bool reverse) {
         xs.push_back(g.x[corner]);
         ys.push_back(g.y[corner]);
         if (!ts.curved) return;
-        int32_t a = e.first[index], b = e.first[index + 1];
-        for (int32_t k = 0; k < b - a; ++k) {
-            int32_t m = reverse ? b - 1 - k : a + k;
-            xs.push_back(e.px[size_t(m)]);
-            ys.push_back(e.py[size_t(m)]);
+        for (int k = 0, n = edge_point_count(e, index); k < n; ++k) {
+            double x, y;
+            edge_point(g, e, index, a, b, reverse ? n - 1 - k : k, x, y);
+            xs.push_back(x);
+            ys.push_back(y);
         }
     };
-    side(g.at(i, j), e.horizontal(i, j), false);
-    side(g.at(i + 1, j), e.vertical(i + 1, j), false);
-    side(g.at(i + 1, j + 1), e.horizontal(i, j + 1), true);
-    side(g.at(i, j + 1), e.vertical(i, j), true);
+    const size_t c00 = g.at(i, j), c10 = g.at(i + 1, j), c11 = g.at(i + 1, j + 1), c01 = g.at(i, j + 1);
+    side(c00, e.horizontal(i, j), c00, c10, false);
+    side(c10, e.vertical(i + 1, j), c10, c11, false);
+    side(c11, e.horizontal(i, j + 1), c01, c11, true);
+    side(c01, e.vertical(i, j), c00, c01, true);
 }
 
 // True when a fold of an octahedral or equal-area output (its axes, its rim and the diamond
@@ -658,12 +739,13 @@ double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx,
     dx = dy = 0.0;
     if (!(spacing > 0.0)) return -1.0;
     // The second differences at the two ends, in scalars (as arrays they were stored one by one
-    // and read back in pairs, a stall on every edge); one division a bend (x / s / 8 and
-    // x / (8 s) round alike).
+    // and read back in pairs, a stall on every edge).
     const bool first = at >= 1, second = at + 2 <= n;
     if (!first && !second) return -1.0;
-    const double eight_spacing = 8.0 * spacing;
-    auto bend = [&](double vx, double vy) { return std::fabs(tx * vy - ty * vx) / eight_spacing; };
+    // One reciprocal for the edge's one or two bends (two quotients were a third of this
+    // function's time).
+    const double per_spacing = 1.0 / (8.0 * spacing);
+    auto bend = [&](double vx, double vy) { return std::fabs(tx * vy - ty * vx) * per_spacing; };
     const double ax = first ? x[k0 - step] - 2.0 * x[k0] + x[k1] : 0.0;
     const double ay = first ? y[k0 - step] - 2.0 * y[k0] + y[k1] : 0.0;
     const double bx = second ? x[k0] - 2.0 * x[k1] + x[k1 + step] : 0.0;
@@ -691,8 +773,10 @@ constexpr double kParabolaBend = 16.0, kMidpointBend = 2.0;
 // grid's estimate of its bend is within half of kChordTol (away from folds), the estimated
 // parabola (one or three points) where it is within kParabolaBend times kChordTol, else the
 // polyline of refine_segment (in the reference cell). ts.edges.refine records what was done (0: chord,
-// 1: refined, 2: parabola, -1: could not be refined in the reference cell, whose pixels are
-// then not direct); the general path takes the same polylines (SidePath).
+// 1: refined, 2 and 3: parabola, -1: could not be refined in the reference cell, whose pixels
+// are then not direct). The box's walk takes a parabola as its chord and the sliver beside it
+// (edge_integral's bow: one walk, not the polyline's two or four); the general path and the
+// linear reconstruction take the polylines (SidePath, edge_point).
 void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_t cell) {
     const Conversion& cv = job.cv;
     EdgeMemo& e = ts.edges;
@@ -700,6 +784,9 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
     const size_t edges = size_t((h + 1) * w + h * (w + 1));
     e.first.assign(edges + 1, 0);
     e.refine.assign(edges, 0);
+    e.dx.resize(edges);  // these three are read for parabola edges only
+    e.dy.resize(edges);
+    e.bow.resize(edges);
     e.px.clear();
     e.py.clear();
     auto edge = [&](size_t index, int i0, int j0, int di, int dj) {
@@ -712,17 +799,12 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
             double dx, dy, bend = edge_curve(g, i0, j0, di, dj, dx, dy);
             if (bend >= 0.0 && bend <= 0.5 * kChordTol) return;
             if (bend >= 0.0 && bend <= kParabolaBend * kChordTol) {
-                // P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second difference.
-                const size_t at = e.px.size();
-                const int points = bend <= kMidpointBend * kChordTol ? 1 : 3;
-                e.px.resize(at + size_t(points));
-                e.py.resize(at + size_t(points));
-                for (int q = 0; q < points; ++q) {
-                    const double t = points == 1 ? 0.5 : 0.25 * double(q + 1);
-                    e.px[at + size_t(q)] = g.x[a] + t * (g.x[b] - g.x[a]) + 0.5 * t * (t - 1.0) * dx;
-                    e.py[at + size_t(q)] = g.y[a] + t * (g.y[b] - g.y[a]) + 0.5 * t * (t - 1.0) * dy;
-                }
-                e.refine[index] = 2;
+                // P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second difference: its
+                // points (edge_point) for the general path, its bow for the box's walk.
+                e.refine[index] = bend <= kMidpointBend * kChordTol ? 2 : 3;
+                e.dx[index] = dx;
+                e.dy[index] = dy;
+                e.bow[index] = 0.5 * (dx * (g.y[b] - g.y[a]) - dy * (g.x[b] - g.x[a]));
                 return;
             }
         }
@@ -786,8 +868,7 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
     // Most tiles lie inside the square whole: every corner and polyline point at once.
     bool all = true;
     for (size_t k = 0; all && k < g.x.size(); ++k) all = inside(g.x[k], g.y[k]);
-    for (size_t k = 0; all && ts.curved && k < ts.edges.px.size(); ++k)
-        all = inside(ts.edges.px[k], ts.edges.py[k]);
+    if (all && ts.curved) each_edge_point(g, ts.edges, [&](double x, double y) { all = all && inside(x, y); });
     if (all) return;
     std::vector<double> xs, ys;
     for (int j = 0; j < g.h; ++j) {
@@ -810,11 +891,13 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
 void density_box(const CornerGrid& g, TileScratch& ts) {
     double xmin, xmax, ymin, ymax;
     direct_corner_box(g, ts, 0, g.h, xmin, xmax, ymin, ymax);
-    for (size_t k = 0; ts.curved && k < ts.edges.px.size(); ++k) {
-        xmin = std::min(xmin, ts.edges.px[k]);
-        xmax = std::max(xmax, ts.edges.px[k]);
-        ymin = std::min(ymin, ts.edges.py[k]);
-        ymax = std::max(ymax, ts.edges.py[k]);
+    if (ts.curved) {
+        each_edge_point(g, ts.edges, [&](double x, double y) {
+            xmin = std::min(xmin, x);
+            xmax = std::max(xmax, x);
+            ymin = std::min(ymin, y);
+            ymax = std::max(ymax, y);
+        });
     }
     if (!(xmin <= xmax && ymin <= ymax) ||
         (xmax - xmin + 2.0) * (ymax - ymin + 2.0) > double(kMaxTableTexels)) {

@@ -112,18 +112,29 @@ struct PrefixTable {
 // m_r + g_r (y - r - 1/2), from model.row_m, row_g (rows relative to row_base). The edge lies
 // inside the table. The walk keeps the texel's place in the table and its row's density as it
 // steps, so that a piece costs a few multiplications per channel.
-template <int NCH, bool kGrad>
+//
+// kBow: the edge is the parabola P(t) = C(t) + t (t - 1) D / 2 about its chord C(t) =
+// P0 + t (P1 - P0), with bow = cross(D, P1 - P0) / 2 (texels squared). To first order in its
+// offset from the chord, the integral of Q dy along it is the chord's plus the integral of
+// dQ/dx = f (density times value) over the sliver between them: f(C(t)) cross(d(t), P1 - P0)
+// dt, that is bow times the sum over the chord's pieces of f there times G(t_q) - G(t_p),
+// G(t) = t^3 / 3 - t^2 / 2 (the parabola's sliver, measured along the chord). Exact for the
+// sliver's area (its solid angle where the density is constant); f is taken on the chord, so
+// a sliver that reaches past a texel line the chord does not cross counts that part as the
+// chord's texel. One walk instead of a polyline's two or four.
+template <int NCH, bool kGrad, bool kBow = false>
 void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_base, double x0,
                    double y0, int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1,
-                   int64_t iy1, double* out) {
+                   int64_t iy1, double* out, double bow = 0.0) {
     const double dx = x1 - x0, dy = y1 - y0;
-    if (dy == 0.0) return;
+    if (dy == 0.0 && !kBow) return;  // a level chord holds nothing; its sliver may
     const int64_t nch = NCH ? NCH : t.nch, row_stride = (t.cols + 1) * nch;
     int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
     const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
     double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);
     // Two reciprocals, not four quotients: the divisions were a walk's largest fixed cost (most
     // walks take one or two pieces).
+    // (A bowed level chord's 1 / dy is infinite and never used: it crosses no row.)
     const double inv_dx = steps_x ? 1.0 / dx : 0.0, inv_dy = 1.0 / dy;
     double tx = steps_x ? (line_x - x0) * inv_dx : 2.0, ty = steps_y ? (line_y - y0) * inv_dy : 2.0;
     const double step_tx = double(sx) * inv_dx, step_ty = double(sy) * inv_dy;
@@ -141,13 +152,28 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     // scalar stores: a third of this function's time.) The solid angle is the colour of a row
     // whose running sums are the columns: base col, step 1. Same operations, same results.
     v2d sum01 = {0.0, 0.0}, sum23 = {0.0, 0.0};
-    auto piece = [&](double px, double py, double qx, double qy) {
+    // kBow: the sliver's G at the piece's start; its part of the piece, bow (G(tq) - G(tp)),
+    // times the density there is added to the weight of the texel's value s (the solid
+    // angle's s is 1).
+    double g_p = 0.0;
+    auto sliver = [&](double tq) {
+        const double g_q = tq * tq * (tq * (1.0 / 3.0) - 0.5), part = bow * (g_q - g_p);
+        g_p = g_q;
+        return part;
+    };
+    auto piece = [&](double px, double py, double qx, double qy, double tq) {
         double ey = qy - py, up = px - base_x, uq = qx - base_x, ubar = 0.5 * (up + uq);
         if constexpr (NCH == 3) {
             const v2d b01 = {col, pr[0]}, s01 = {1.0, pr[3] - pr[0]};
             const v2d b23 = load2(pr + 1), s23 = load2(pr + 4) - b23;
             if (!kGrad) {
                 const double em = ey * m;
+                if constexpr (kBow) {
+                    const double ws = em * ubar + m * sliver(tq);
+                    sum01 += em * b01 + s01 * ws;
+                    sum23 += em * b23 + s23 * ws;
+                    return;
+                }
                 sum01 += em * (b01 + s01 * ubar);
                 sum23 += em * (b23 + s23 * ubar);
                 return;
@@ -157,23 +183,28 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
             // ey (m (b + s ubar) + g (b vbar + s uv)) = b (em + eg vbar) + s (em ubar + eg uv):
             // two scalar weights, then two products a pair.
             const double em = ey * m, eg = ey * g;
-            const double wb = em + eg * vbar, ws = em * ubar + eg * uv;
+            const double wb = em + eg * vbar;
+            double ws = em * ubar + eg * uv;
+            if constexpr (kBow) ws += (m + g * vbar) * sliver(tq);
             sum01 += b01 * wb + s01 * ws;
             sum23 += b23 * wb + s23 * ws;
             return;
         }
+        const double density = kGrad ? m + g * 0.5 * ((py - mid) + (qy - mid)) : m;
+        const double bowed = kBow ? density * sliver(tq) : 0.0;
         if (!kGrad) {
             double em = ey * m;
-            sum[0] += em * (col + ubar);
-            for (int64_t ch = 0; ch < nch; ++ch) sum[1 + ch] += em * (pr[ch] + (pr[nch + ch] - pr[ch]) * ubar);
+            sum[0] += em * (col + ubar) + bowed;
+            for (int64_t ch = 0; ch < nch; ++ch)
+                sum[1 + ch] += em * (pr[ch] + (pr[nch + ch] - pr[ch]) * ubar) + bowed * (pr[nch + ch] - pr[ch]);
             return;
         }
         double vp = py - mid, vq = qy - mid, vbar = 0.5 * (vp + vq);
         double uv = (up * (2.0 * vp + vq) + uq * (vp + 2.0 * vq)) * (1.0 / 6.0);
-        sum[0] += ey * (m * (col + ubar) + g * (col * vbar + uv));
+        sum[0] += ey * (m * (col + ubar) + g * (col * vbar + uv)) + bowed;
         for (int64_t ch = 0; ch < nch; ++ch) {
             double b = pr[ch], s = pr[nch + ch] - b;
-            sum[1 + ch] += ey * (m * (b + s * ubar) + g * (b * vbar + s * uv));
+            sum[1 + ch] += ey * (m * (b + s * ubar) + g * (b * vbar + s * uv)) + bowed * s;
         }
     };
     // Which line comes next is as good as random: the steps are selects, not branches.
@@ -183,7 +214,7 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
         const bool across_x = tx < ty;
         const double qx = across_x ? line_x : x0 + ty * dx;
         const double qy = across_x ? y0 + tx * dy : line_y;
-        piece(px, py, qx, qy);
+        piece(px, py, qx, qy, across_x ? tx : ty);
         px = qx;
         py = qy;
         pr += across_x ? step_cx : step_cy;
@@ -201,7 +232,7 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
         tx = across_x ? (steps_x ? tx + step_tx : 2.0) : tx;
         ty = across_x ? ty : (steps_y ? ty + step_ty : 2.0);
     }
-    piece(px, py, x1, y1);
+    piece(px, py, x1, y1, 1.0);
     if constexpr (NCH == 3) {
         out[0] += sum01[0];
         out[1] += sum01[1];
@@ -220,11 +251,14 @@ struct EdgeMemo {
     int w = 0, h = 0;
     int64_t stride = 0;  // doubles per edge: 1 + channels (solid angle, colour)
     std::vector<double> hv, vv, pixel;
-    // A curved tile's edges as polylines: the refinement points of edge e (horizontal edges
-    // first, then vertical ones) are px, py [first[e], first[e + 1]).
+    // A curved tile's edges (horizontal edges first, then vertical ones). refine: 0 chord,
+    // 1 refined (its points px, py [first[e], first[e + 1])), 2 and 3 the parabola the grid
+    // implies through its midpoint or its quarter points (computed from its corners and D =
+    // (dx, dy), area.cpp's edge_point), -1 not in the reference cell.
     std::vector<int32_t> first;
     std::vector<double> px, py;
-    std::vector<signed char> refine;  // per edge: 1 refined, 0 chord, -1 not in the cell
+    std::vector<signed char> refine;
+    std::vector<double> dx, dy, bow;  // per parabola edge: D (texels) and edge_integral's bow
     void reset(int w_, int h_, int64_t nch) {
         w = w_;
         h = h_;
