@@ -719,11 +719,14 @@ bool tile_on_fold(const Conversion& cv, const CornerGrid& g, int64_t cell) {
 // (i + di, j + dj) strays from its chord, as the grid estimates it: the second differences
 // along its line at its two ends (the one inside the line at its ends, doubled to stay on the
 // safe side), across the line, over the spacing of the lines beside it, over eight; (dx, dy)
-// their mean, in texels. -1 (no estimate) where the two ends' second differences disagree by
-// more than a quarter of kChordTol: the bend changes along the edge (as near a pole), and an
-// estimate would not hold. The terms along the line use its own corners only, which the tile
+// their mean D, in texels. Where the second derivative changes linearly along the edge (a
+// cubic, as near a pole), the parabola of D has the cubic's midpoint and the same area between
+// it and the chord, so the estimate holds while the two ends' bends differ by up to
+// kBendChange of their mean (or a quarter of kChordTol); beyond that, or where they bend to
+// opposite sides by more than that, -1 (no estimate). The terms along the line use its own corners only, which the tile
 // beyond a boundary line shares, so both tiles estimate a boundary edge alike (up to the
 // spacing beside it, which decides only how an edge is taken, not where its points go).
+constexpr double kBendChange = 0.5;
 double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx, double& dy) {
     const double *x = g.x.data(), *y = g.y.data();
     const int n = di ? g.w : g.h, at = di ? i : j;        // position along the line
@@ -745,7 +748,8 @@ double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx,
     // One reciprocal for the edge's one or two bends (two quotients were a third of this
     // function's time).
     const double per_spacing = 1.0 / (8.0 * spacing);
-    auto bend = [&](double vx, double vy) { return std::fabs(tx * vy - ty * vx) * per_spacing; };
+    auto signed_bend = [&](double vx, double vy) { return (tx * vy - ty * vx) * per_spacing; };
+    auto bend = [&](double vx, double vy) { return std::fabs(signed_bend(vx, vy)); };
     const double ax = first ? x[k0 - step] - 2.0 * x[k0] + x[k1] : 0.0;
     const double ay = first ? y[k0 - step] - 2.0 * y[k0] + y[k1] : 0.0;
     const double bx = second ? x[k0] - 2.0 * x[k1] + x[k1 + step] : 0.0;
@@ -757,9 +761,10 @@ double edge_curve(const CornerGrid& g, int i, int j, int di, int dj, double& dx,
     }
     dx = 0.5 * ax + 0.5 * bx;
     dy = 0.5 * ay + 0.5 * by;
-    const double b0 = bend(ax, ay), b1 = bend(bx, by);
-    if (std::fabs(b0 - b1) > 0.25 * kChordTol) return -1.0;
-    return 0.5 * (b0 + b1);
+    const double s0 = signed_bend(ax, ay), s1 = signed_bend(bx, by);
+    const double mean = 0.5 * (std::fabs(s0) + std::fabs(s1));
+    if (std::fabs(s0 - s1) > std::max(0.25 * kChordTol, kBendChange * mean)) return -1.0;
+    return mean;
 }
 
 // An edge estimated to bend up to this many times kChordTol is taken as the parabola the grid
