@@ -1038,3 +1038,29 @@ def test_a_pixel_where_singular_features_meet_keeps_its_own_solid_angle(source_n
     assert omega.sum() == pytest.approx(4 * math.pi, rel=1e-4)
     held = truth > 0.2 * np.median(truth[truth > 0])
     np.testing.assert_allclose(omega[held], truth[held], rtol=1e-2)
+
+
+def _cube_pixel_solid_angles(n):
+    """Solid angle (sr) of every pixel of an N × N cube face, in closed form: the face's
+    rectangle [a0, a1] × [b0, b1] at unit distance holds F(a1, b1) − F(a0, b1) − F(a1, b0) +
+    F(a0, b0), F(a, b) = atan(ab / √(a² + b² + 1))."""
+    t = np.linspace(-1.0, 1.0, n + 1)
+    a, b = np.meshgrid(t, t)
+    f = np.arctan2(a * b, np.sqrt(a * a + b * b + 1.0))
+    return f[1:, 1:] - f[:-1, 1:] - f[1:, :-1] + f[:-1, :-1]
+
+
+def test_a_cube_pixels_footprint_near_a_lat_long_pole_holds_its_solid_angle():
+    """Around a lat-long's poles every tile of a 1:1 cube is curved, and most pixel sides are
+    taken as the parabola the corner grid implies, integrated as its chord plus the sliver
+    between them. Each pixel of all six faces holds its closed-form solid angle within 1.2e-3
+    (chords alone: 8e-3; the sliver subtracted rather than added: 1.6e-2), 2e-4 rms."""
+    n = 128
+    omega = _area_solid_angles("latlong", 2 * n, "cube-vcross", n)
+    truth = _cube_pixel_solid_angles(n)
+    cells = [(0, 1), (1, 0), (1, 1), (1, 2), (2, 1), (3, 1)]  # the vertical cross's faces
+    for row, col in cells:
+        face = omega[row * n : (row + 1) * n, col * n : (col + 1) * n]
+        error = face / truth - 1.0
+        assert np.abs(error).max() < 1.2e-3, (row, col)
+        assert np.sqrt(np.mean(error**2)) < 2e-4, (row, col)
