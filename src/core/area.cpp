@@ -412,9 +412,11 @@ void each_edge_point(const CornerGrid& g, const EdgeMemo& e, F&& f) {
 
 // Integral of the grid's edge from corner a to corner b through the tile's table, along its
 // polyline (count refinement points px, py) in a curved tile, or (bow not 0) the parabola
-// about its chord that edge_integral's bow describes.
+// about its chord that edge_integral's bow describes. Inlined into edge_pixels' loops (as a
+// call it cost 2 % of the one shot's kernel).
 template <class Walk>
-void grid_edge(const AreaJob& job, const CornerGrid& g, const typename Walk::Table& t,
+__attribute__((always_inline)) inline void grid_edge(const AreaJob& job, const CornerGrid& g,
+                                                     const typename Walk::Table& t,
                int64_t row_base, size_t a, size_t b, double* out, const double* px = nullptr,
                const double* py = nullptr, int count = 0, double bow = 0.0) {
     const int64_t nch = Walk::NCH ? Walk::NCH : t.nch;

@@ -129,6 +129,41 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     const double dx = x1 - x0, dy = y1 - y0;
     if (dy == 0.0 && !kBow) return;  // a level chord holds nothing; its sliver may
     const int64_t nch = NCH ? NCH : t.nch, row_stride = (t.cols + 1) * nch;
+    if constexpr (NCH == 3 && !kGrad && !kBow) {
+        // A vertical edge (a meridian of a lat-long, as every vertical pixel side of a cube's
+        // side faces is) crosses rows only: S_r(x) = b_r + s_r u at one u, no reciprocals.
+        if (dx == 0.0) {
+            const double* pr = t.p.data() + ((iy0 - t.r0) * (t.cols + 1) + (ix0 - t.c0)) * 3;
+            const double* row_m = model.row_m.data() - row_base;
+            const double u = x0 - double(ix0), col = double(ix0 - t.c0);
+            const int sy = dy > 0.0 ? 1 : -1;
+            const int64_t step = sy * row_stride;
+            v2d sum01 = {0.0, 0.0}, sum23 = {0.0, 0.0};
+            const v2d su = {1.0, 0.0};
+            double py = y0, line_y = double(sy > 0 ? iy0 + 1 : iy0);
+            int64_t r = iy0;
+            auto piece = [&](double qy) {
+                const double em = (qy - py) * row_m[r];
+                const v2d b01 = {col, pr[0]}, s01 = su * u + v2d{0.0, (pr[3] - pr[0]) * u};
+                const v2d b23 = load2(pr + 1), s23 = (load2(pr + 4) - b23) * u;
+                sum01 += em * (b01 + s01);
+                sum23 += em * (b23 + s23);
+            };
+            for (int64_t left = std::llabs(iy1 - iy0); left > 0; --left) {
+                piece(line_y);
+                py = line_y;
+                line_y += double(sy);
+                r += sy;
+                pr += step;
+            }
+            piece(y1);
+            out[0] += sum01[0];
+            out[1] += sum01[1];
+            out[2] += sum23[0];
+            out[3] += sum23[1];
+            return;
+        }
+    }
     int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
     const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
     double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);

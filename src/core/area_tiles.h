@@ -28,6 +28,7 @@ struct CornerGrid {
     std::vector<char> inside;        // corner interpolated (else mapped exactly)
     double bend;                     // how far pixel edges' images stray from chords (pixels)
     bool usable;                     // every corner has a point in ref_cell
+    std::vector<double> coons_u;     // coons_fill's scratch: i / w of a patch's columns
 
     void resize(int w_, int h_) {
         w = w_;
@@ -131,6 +132,10 @@ inline bool output_smooth(const Geometry& d, int64_t cell, double x0, double y0,
 inline bool coons_fill(const Conversion& cv, int64_t cell, CornerGrid& g, int a0, int b0, int a1,
                        int b1, double tol) {
     const int w = a1 - a0, h = b1 - b0;
+    // u = i / w, one quotient a column rather than one a corner (the same values).
+    g.coons_u.resize(size_t(w));
+    double* us = g.coons_u.data();
+    for (int i = 1; i < w; ++i) us[i] = double(i) / w;
     for (int q = 0; q < 2; ++q) {
         double* c = (q == 0 ? g.x : g.y).data();
         const double* top = c + g.at(a0, b0);
@@ -143,10 +148,7 @@ inline bool coons_fill(const Conversion& cv, int64_t cell, CornerGrid& g, int a0
             // (1 - v) top + v bottom + (1 - u) left + u right - bilinear(corners), with u = i / w.
             const double base = left - ((1.0 - v) * c00 + v * c01);
             const double slope = (right - ((1.0 - v) * c10 + v * c11)) - base;
-            for (int i = 1; i < w; ++i) {
-                const double u = double(i) / w;
-                row[i] = (1.0 - v) * top[i] + v * bot[i] + base + u * slope;
-            }
+            for (int i = 1; i < w; ++i) row[i] = (1.0 - v) * top[i] + v * bot[i] + base + us[i] * slope;
         }
     }
     for (int j = b0 + 1; j < b1; ++j) {
