@@ -796,22 +796,26 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
     e.bow.resize(edges);
     e.px.clear();
     e.py.clear();
+    // Folds exist only in octahedral and equal-area squares (edge_on_fold).
+    const bool folded = cv.dst.family == kOctahedral || cv.dst.family == kEqualArea ||
+                        cv.src.family == kOctahedral || cv.src.family == kEqualArea;
     auto edge = [&](size_t index, int i0, int j0, int di, int dj) {
         e.first[index] = int32_t(e.px.size());
         size_t a = g.at(i0, j0), b = g.at(i0 + di, j0 + dj);
         double ox0 = double(g.i0 + i0) * cv.scale_x, oy0 = double(g.j0 + j0) * cv.scale_y;
         double ox1 = double(g.i0 + i0 + di) * cv.scale_x, oy1 = double(g.j0 + j0 + dj) * cv.scale_y;
-        bool fold = edge_on_fold(cv, cell, ox0, oy0, ox1, oy1, g.exact[a], g.exact[b]);
+        bool fold = folded && edge_on_fold(cv, cell, ox0, oy0, ox1, oy1, g.exact[a], g.exact[b]);
         if (!fold) {
             double dx, dy, bend = edge_curve(g, i0, j0, di, dj, dx, dy);
-            if (bend >= 0.0 && bend <= 0.5 * kChordTol) return;
             if (bend >= 0.0 && bend <= kParabolaBend * kChordTol) {
-                // P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second difference: its
-                // points (edge_point) for the general path, its bow for the box's walk.
-                e.refine[index] = bend <= kMidpointBend * kChordTol ? 2 : 3;
+                // A chord, or P(t) = P0 + t (P1 - P0) + t (t - 1) D / 2, D the second
+                // difference: its points (edge_point) for the general path, its bow for the
+                // box's walk. Chosen by selects: the three cases mix as good as randomly.
+                const bool chord = bend <= 0.5 * kChordTol;
+                e.refine[index] = chord ? 0 : bend <= kMidpointBend * kChordTol ? 2 : 3;
                 e.dx[index] = dx;
                 e.dy[index] = dy;
-                e.bow[index] = 0.5 * (dx * (g.y[b] - g.y[a]) - dy * (g.x[b] - g.x[a]));
+                e.bow[index] = chord ? 0.0 : 0.5 * (dx * (g.y[b] - g.y[a]) - dy * (g.x[b] - g.x[a]));
                 return;
             }
         }
@@ -925,7 +929,8 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     const bool usable = regular && grid.usable;
     // Straight: every pixel edge's image within kChordTol of its chord (half of it as the
     // grid estimates it) and no fold in reach; else each edge is refined (refine_tile_edges).
-    const bool straight = usable && grid.bend <= 0.5 * kChordTol && !tile_on_fold(cv, grid, cell);
+    const bool folds = usable && tile_on_fold(cv, grid, cell);
+    const bool straight = usable && grid.bend <= 0.5 * kChordTol && !folds;
     const int64_t period = s.family == kLatlong && s.guard == 0 ? 2 * s.n : 0;
     const int64_t row0 = (grid.ref_cell / s.columns) * s.cell_height();
     const bool rows = !job.model.row_m.empty();
@@ -936,7 +941,9 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     const bool tables = rows;
     ts.direct.assign(size_t(grid.w * grid.h), 0);
     const int64_t st = grid.w + 1;
-    const bool all_direct = straight && whole_tile_direct(s, grid);
+    // Every pixel passes direct_quad where the whole grid does (a lat-long or tennisball
+    // source), curved or not, unless an output fold may cut one.
+    const bool all_direct = usable && !folds && whole_tile_direct(s, grid);
     if (all_direct) std::fill(ts.direct.begin(), ts.direct.end(), 1);
     // A disk source's -Z (its whole rim) in or on a pixel: the side through it leaves the
     // rim at one point and comes back at the opposite one, and its image is that half of the
