@@ -322,6 +322,7 @@ struct TileScratch {
     SidePath sides[4];                // how the tile took a general-path pixel's sides
 
     PrefixTable table;
+    ColumnTable column_table;        // a tile of meridians' (area_prefix.h)
     LinearPrefixTable linear_table;  // the linear reconstruction's (area_linear_walk.h)
     DensityCache density;  // the tile's texel densities (sources without exact rows)
     EdgeMemo edges;
@@ -344,6 +345,7 @@ struct BoxWalk {
                      int64_t iy1, double* out) {
         edge_integral<NCH, kGrad>(t, model, row_base, x0, y0, ix0, iy0, x1, y1, ix1, iy1, out);
     }
+    static constexpr bool kMeridians = false;
     // A parabola edge in one walk: its chord and the sliver between them (edge_integral).
     static constexpr bool kBows = true;
     static void bowed(const Table& t, const SourceModel& model, int64_t row_base, double x0,
@@ -365,7 +367,26 @@ struct LinearWalk {
         edge_integral_linear<NCH, kGrad>(t, model, row_base, x0, y0, ix0, iy0, x1, y1, ix1, iy1,
                                          out);
     }
+    static constexpr bool kMeridians = false;
     // The linear reconstruction's value varies across a texel: its parabolas go as polylines.
+    static constexpr bool kBows = false;
+    static void bowed(const Table&, const SourceModel&, int64_t, double, double, int64_t, int64_t,
+                      double, double, int64_t, int64_t, double*, double) {}
+};
+
+// A straight tile whose vertical sides all lie on meridians (tile_meridians), three channels,
+// flat rows: minus P dx through the column table (edge_integral_columns), horizontal sides
+// only.
+struct ColumnWalk {
+    static constexpr int NCH = 3;
+    using Table = ColumnTable;
+    static const Table& table(const TileScratch& ts) { return ts.column_table; }
+    static void edge(const Table& t, const SourceModel&, int64_t, double x0, double y0,
+                     int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1, int64_t iy1,
+                     double* out) {
+        edge_integral_columns(t, x0, y0, ix0, iy0, x1, y1, ix1, iy1, out);
+    }
+    static constexpr bool kMeridians = true;
     static constexpr bool kBows = false;
     static void bowed(const Table&, const SourceModel&, int64_t, double, double, int64_t, int64_t,
                       double, double, int64_t, int64_t, double*, double) {}
@@ -490,7 +511,7 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
                             &e.hv[size_t(j * w + i) * st], px, py, count, bow);
         }
     }
-    for (int j = j0; j < j1; ++j) {
+    for (int j = j0; j < j1 && !Walk::kMeridians; ++j) {  // a meridian holds no - P dx
         const char* row = dir + j * w;
         for (int i = 0; i <= w; ++i) {
             if (!((i > 0 && row[i - 1]) || (i < w && row[i]))) continue;
@@ -508,9 +529,13 @@ void edge_pixels(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64
             if (!row[i]) continue;
             const double* tp = &e.hv[size_t(j * w + i) * st];
             const double* bt = &e.hv[size_t((j + 1) * w + i) * st];
+            double* sum = &e.pixel[size_t(j * w + i) * st];
+            if constexpr (Walk::kMeridians) {
+                for (int64_t c = 0; c <= NCH; ++c) sum[c] = tp[c] - bt[c];
+                continue;
+            }
             const double* lf = &e.vv[size_t(j * (w + 1) + i) * st];
             const double* rt = lf + st;
-            double* sum = &e.pixel[size_t(j * w + i) * st];
             for (int64_t c = 0; c <= (NCH ? NCH : nch); ++c) sum[c] = tp[c] + rt[c] - bt[c] - lf[c];
         }
     }
@@ -538,6 +563,22 @@ EdgePixels edge_pixels_linear_for(bool grad, int64_t nch) {
     return edge_pixels_of<LinearWalk>(grad, nch);
 }
 
+// True when every vertical line of corners of the grid lies at one x (a meridian of a
+// lat-long: a cube's side faces, any tile of a lat-long → lat-long without rotation), to
+// within kMeridianTol texels: the maps and the Coons interior round the same longitude a few
+// units in the last place apart. A side that far off its meridian holds at most kMeridianTol
+// times a column of the tile's rows (1e-7 of a texel's value for 100 rows), below float32
+// output; the column walk takes it as nothing.
+constexpr double kMeridianTol = 1e-9;
+bool tile_meridians(const CornerGrid& g) {
+    for (int i = 0; i <= g.w; ++i) {
+        const double x = g.x[g.at(i, 0)];
+        for (int j = 1; j <= g.h; ++j)
+            if (!(std::fabs(g.x[g.at(i, j)] - x) <= kMeridianTol)) return false;
+    }
+    return true;
+}
+
 // The box of the corners of the direct pixels of rows [j0, j1) of the tile (empty, xmin >
 // xmax, where there are none).
 void direct_corner_box(const CornerGrid& g, const TileScratch& ts, int j0, int j1, double& xmin,
@@ -561,7 +602,7 @@ void direct_corner_box(const CornerGrid& g, const TileScratch& ts, int j0, int j
 // Build the prefix table over the corners of the direct pixels of rows [j0, j1) of the tile;
 // false when there are none, the box is too large or holds a texel that is not finite.
 bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0, int j1,
-                bool& grad, SlopeCache* slopes = nullptr) {
+                bool& grad, SlopeCache* slopes = nullptr, bool* columns = nullptr) {
     const Geometry& s = job.cv.src;
     // The box of every corner of rows [j0, j1]; where that is too large (a pixel far off, as
     // near a pole), the box of the direct pixels' corners only.
@@ -604,6 +645,9 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     grad = false;
     for (int64_t r = r0; r <= r1; ++r) grad = grad || job.model.row_g[size_t(r - row_base)] != 0.0;
     if (slopes) return ts.linear_table.build(job.model.image, *slopes, period, r0, r1, c0, c1);
+    if (columns && *columns && !grad)  // the tile's meridians take the column table
+        return ts.column_table.build(job.model.image, job.model.row_m, row_base, period, r0, r1, c0, c1);
+    if (columns) *columns = false;
     return ts.table.build(job.model.image, period, r0, r1, c0, c1);
 }
 
@@ -945,6 +989,9 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     // source), curved or not, unless an output fold may cut one.
     const bool all_direct = usable && !folds && whole_tile_direct(s, grid);
     if (all_direct) std::fill(ts.direct.begin(), ts.direct.end(), 1);
+    // Straight sides on meridians, three channels, the box: - P dx down the columns, the
+    // horizontal sides alone (ColumnTable; its rows must be flat, tile_table's to decide).
+    const bool meridians = tables && straight && !linear && sums.nch == 3 && tile_meridians(grid);
     // A disk source's -Z (its whole rim) in or on a pixel: the side through it leaves the
     // rim at one point and comes back at the opposite one, and its image is that half of the
     // rim, not the chord the grid would take (a sun on the rim texels of a 32-px mirror ball
@@ -979,18 +1026,23 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
     // Rows of pixels share one table where it fits, else each pixel row has its own.
     int band_j0 = 0;
     while (band_j0 < grid.h) {
-        bool grad = false, whole = tables && tile_table(job, grid, ts, band_j0, grid.h, grad, sp.linear);
+        bool by_columns = meridians;
+        bool grad = false, whole = tables && tile_table(job, grid, ts, band_j0, grid.h, grad,
+                                                        sp.linear, &by_columns);
         int band_j1 = grid.h;
         if (!whole && tables) {
             band_j1 = band_j0 + 1;
-            whole = tile_table(job, grid, ts, band_j0, band_j1, grad, sp.linear);
+            by_columns = meridians;
+            whole = tile_table(job, grid, ts, band_j0, band_j1, grad, sp.linear, &by_columns);
         } else if (!tables) {
             band_j1 = grid.h;
         }
         if (whole) {
             ts.edges.reset(grid.w, grid.h, sums.nch);
-            (linear ? edge_pixels_linear_for : edge_pixels_for)(grad, sums.nch)(job, grid, ts, row0,
-                                                                            band_j0, band_j1);
+            const EdgePixels walk = by_columns ? edge_pixels<ColumnWalk>
+                                    : linear   ? edge_pixels_linear_for(grad, sums.nch)
+                                               : edge_pixels_for(grad, sums.nch);
+            walk(job, grid, ts, row0, band_j0, band_j1);
         }
         for (int j = band_j0; j < band_j1; ++j) {
             for (int i = 0; i < grid.w; ++i) {

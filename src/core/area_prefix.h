@@ -280,6 +280,115 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
     }
 }
 
+// Running sums down the columns of a box of source rows whose density is flat (every row's
+// g_r is 0), the density inside: p[(c * (rows + 1) + k) * 3 + ch] is the sum of m_r times
+// texel (r, c0 + c) over rows r0 ... r0 + k - 1 (columns modulo `period` when it is not 0),
+// and m[k] the sum of m_r alone (the solid angle's). Three channels.
+//
+// With P(x, y) = the integral of density times value down column floor(x) from row r0 to y,
+// the colour a footprint holds is also minus the closed integral of P dx (Green's theorem, as
+// area_prefix.h's Q dy): a vertical side contributes nothing. Where every vertical side of a
+// tile lies on one source column's meridian (a cube's side faces from a lat-long: x depends
+// on the longitude alone), only its horizontal sides are walked, half of the walks.
+struct ColumnTable {
+    int64_t r0 = 0, c0 = 0, rows = 0, cols = 0, nch = 3;
+    std::vector<double> p, m;
+
+    // Fill the table for rows [r0, r1] and columns [c0, c1] (row densities row_m, relative to
+    // row_base); false when a sum is not finite (the per-texel path then).
+    bool build(const Image& src, const std::vector<double>& row_m, int64_t row_base,
+               int64_t period, int64_t r0_, int64_t r1, int64_t c0_, int64_t c1) {
+        r0 = r0_;
+        c0 = c0_;
+        rows = r1 - r0 + 1;
+        cols = c1 - c0 + 1;
+        const int64_t stride = (rows + 1) * 3;
+        size_t need = size_t(cols * stride);
+        if (p.size() < need) p.resize(need);
+        m.resize(size_t(rows + 1));
+        m[0] = 0.0;
+        for (int64_t k = 0; k < rows; ++k) m[size_t(k + 1)] = m[size_t(k)] + row_m[size_t(r0 + k - row_base)];
+        for (int64_t c = 0; c < cols; ++c) p[size_t(c * stride)] = p[size_t(c * stride + 1)] = p[size_t(c * stride + 2)] = 0.0;
+        const int64_t start = period ? ((c0 % period) + period) % period : c0;
+        for (int64_t k = 0; k < rows; ++k) {  // row by row: the source is read in its order
+            const double mk = row_m[size_t(r0 + k - row_base)];
+            int64_t done = 0, x = start;
+            while (done < cols) {  // at most two runs of source columns: up to the wrap, then from 0
+                int64_t run = period ? std::min(cols - done, period - x) : cols - done;
+                const float* v = src.texel(r0 + k, x);
+                double* out = p.data() + done * stride + (k + 1) * 3;
+                for (int64_t c = 0; c < run; ++c, v += 3, out += stride) {
+                    out[0] = out[-3] + mk * double(v[0]);
+                    out[1] = out[-2] + mk * double(v[1]);
+                    out[2] = out[-1] + mk * double(v[2]);
+                }
+                done += run;
+                x = 0;
+            }
+        }
+        for (int64_t c = 0; c < cols; ++c)
+            for (int64_t ch = 0; ch < 3; ++ch)
+                if (!std::isfinite(p[size_t(c * stride + rows * 3 + ch)])) return false;
+        return true;
+    }
+};
+
+// Add minus the integral of P dx along the edge (x0, y0) -> (x1, y1) (in texels (ix0, iy0)
+// and (ix1, iy1)) to out[0] (solid angle) and out[1 ...] (colour), P from the column table
+// (ColumnTable). The edge lies inside the table. In texel (c, r), P is linear in y, and y in x
+// along a piece, so the piece holds its length in x times P at its mean y: one product a
+// channel, as edge_integral's flat pieces. A vertical edge holds nothing.
+inline void edge_integral_columns(const ColumnTable& t, double x0, double y0, int64_t ix0,
+                                  int64_t iy0, double x1, double y1, int64_t ix1, int64_t iy1,
+                                  double* out) {
+    const double dx = x1 - x0, dy = y1 - y0;
+    if (dx == 0.0) return;
+    const int64_t stride = (t.rows + 1) * 3;
+    int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
+    const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
+    double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);
+    const double inv_dx = 1.0 / dx, inv_dy = steps_y ? 1.0 / dy : 0.0;
+    double tx = steps_x ? (line_x - x0) * inv_dx : 2.0, ty = steps_y ? (line_y - y0) * inv_dy : 2.0;
+    const double step_tx = double(sx) * inv_dx, step_ty = double(sy) * inv_dy;
+    const double* pc = t.p.data() + (ix0 - t.c0) * stride + (iy0 - t.r0) * 3;
+    const double* pm = t.m.data() + (iy0 - t.r0);
+    double base_y = double(iy0);
+    // (solid angle, colour 0) and (colour 1, colour 2) as pairs, as edge_integral's.
+    v2d sum01 = {0.0, 0.0}, sum23 = {0.0, 0.0};
+    auto piece = [&](double px, double py, double qx, double qy) {
+        const double ex = px - qx, vbar = 0.5 * (py + qy) - base_y;  // minus: -P dx
+        const v2d b01 = {pm[0], pc[0]}, s01 = v2d{pm[1], pc[3]} - b01;
+        const v2d b23 = load2(pc + 1), s23 = load2(pc + 4) - b23;
+        sum01 += ex * (b01 + s01 * vbar);
+        sum23 += ex * (b23 + s23 * vbar);
+    };
+    double px = x0, py = y0;
+    const int64_t step_cx = sx * stride, step_cy = sy * 3;
+    for (int left = steps_x + steps_y; left > 0; --left) {
+        const bool across_x = tx < ty;
+        const double qx = across_x ? line_x : x0 + ty * dx;
+        const double qy = across_x ? y0 + tx * dy : line_y;
+        piece(px, py, qx, qy);
+        px = qx;
+        py = qy;
+        pc += across_x ? step_cx : step_cy;
+        pm += across_x ? 0 : sy;
+        const double shift_x = across_x ? double(sx) : 0.0, shift_y = across_x ? 0.0 : double(sy);
+        line_x += shift_x;
+        base_y += shift_y;
+        line_y += shift_y;
+        steps_x -= across_x;
+        steps_y -= !across_x;
+        tx = across_x ? (steps_x ? tx + step_tx : 2.0) : tx;
+        ty = across_x ? ty : (steps_y ? ty + step_ty : 2.0);
+    }
+    piece(px, py, x1, y1);
+    out[0] += sum01[0];
+    out[1] += sum01[1];
+    out[2] += sum23[0];
+    out[3] += sum23[1];
+}
+
 // Edge integrals of a tile, each computed once: horizontal edge (i, j) runs from corner (i, j)
 // to (i + 1, j), vertical edge (i, j) from (i, j) to (i, j + 1); and each pixel's sums.
 struct EdgeMemo {
