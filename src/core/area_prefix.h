@@ -11,6 +11,7 @@
 // perimeter, not its area. The prefix sums are made per tile over its source box.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
@@ -281,9 +282,10 @@ void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_b
 }
 
 // Running sums down the columns of a box of source rows whose density is flat (every row's
-// g_r is 0), the density inside: p[(c * (rows + 1) + k) * 3 + ch] is the sum of m_r times
-// texel (r, c0 + c) over rows r0 ... r0 + k - 1 (columns modulo `period` when it is not 0),
-// and m[k] the sum of m_r alone (the solid angle's). Three channels.
+// g_r is 0), the density inside: p[(k * cols + c) * 3 + ch] is the sum of m_r times texel
+// (r, c0 + c) over rows r0 ... r0 + k - 1 (columns modulo `period` when it is not 0), and
+// m[k] the sum of m_r alone (the solid angle's). Three channels. Row k + 1 is row k plus a
+// source row: built in the source's order, a running sum a column.
 //
 // With P(x, y) = the integral of density times value down column floor(x) from row r0 to y,
 // the colour a footprint holds is also minus the closed integral of P dx (Green's theorem, as
@@ -302,33 +304,31 @@ struct ColumnTable {
         c0 = c0_;
         rows = r1 - r0 + 1;
         cols = c1 - c0 + 1;
-        const int64_t stride = (rows + 1) * 3;
-        size_t need = size_t(cols * stride);
-        if (p.size() < need) p.resize(need);
+        const int64_t line = cols * 3;
+        size_t need = size_t((rows + 1) * line);
+        if (p.size() < need) p.resize(need);  // grows to the largest table only: no refills
         m.resize(size_t(rows + 1));
         m[0] = 0.0;
-        for (int64_t k = 0; k < rows; ++k) m[size_t(k + 1)] = m[size_t(k)] + row_m[size_t(r0 + k - row_base)];
-        for (int64_t c = 0; c < cols; ++c) p[size_t(c * stride)] = p[size_t(c * stride + 1)] = p[size_t(c * stride + 2)] = 0.0;
+        std::fill(p.begin(), p.begin() + line, 0.0);
         const int64_t start = period ? ((c0 % period) + period) % period : c0;
-        for (int64_t k = 0; k < rows; ++k) {  // row by row: the source is read in its order
+        for (int64_t k = 0; k < rows; ++k) {
             const double mk = row_m[size_t(r0 + k - row_base)];
+            m[size_t(k + 1)] = m[size_t(k)] + mk;
+            const double* above = p.data() + k * line;
+            double* out = p.data() + (k + 1) * line;
             int64_t done = 0, x = start;
             while (done < cols) {  // at most two runs of source columns: up to the wrap, then from 0
                 int64_t run = period ? std::min(cols - done, period - x) : cols - done;
                 const float* v = src.texel(r0 + k, x);
-                double* out = p.data() + done * stride + (k + 1) * 3;
-                for (int64_t c = 0; c < run; ++c, v += 3, out += stride) {
-                    out[0] = out[-3] + mk * double(v[0]);
-                    out[1] = out[-2] + mk * double(v[1]);
-                    out[2] = out[-1] + mk * double(v[2]);
-                }
+                for (int64_t q = done * 3, end = (done + run) * 3; q < end; ++q, ++v)
+                    out[q] = above[q] + mk * double(*v);
                 done += run;
                 x = 0;
             }
         }
-        for (int64_t c = 0; c < cols; ++c)
-            for (int64_t ch = 0; ch < 3; ++ch)
-                if (!std::isfinite(p[size_t(c * stride + rows * 3 + ch)])) return false;
+        const double* last = p.data() + rows * line;
+        for (int64_t q = 0; q < line; ++q)
+            if (!std::isfinite(last[q])) return false;
         return true;
     }
 };
@@ -343,27 +343,27 @@ inline void edge_integral_columns(const ColumnTable& t, double x0, double y0, in
                                   double* out) {
     const double dx = x1 - x0, dy = y1 - y0;
     if (dx == 0.0) return;
-    const int64_t stride = (t.rows + 1) * 3;
+    const int64_t line = t.cols * 3;  // the table's next row
     int steps_x = int(std::llabs(ix1 - ix0)), steps_y = int(std::llabs(iy1 - iy0));
     const int sx = dx > 0.0 ? 1 : -1, sy = dy > 0.0 ? 1 : -1;
     double line_x = double(sx > 0 ? ix0 + 1 : ix0), line_y = double(sy > 0 ? iy0 + 1 : iy0);
     const double inv_dx = 1.0 / dx, inv_dy = steps_y ? 1.0 / dy : 0.0;
     double tx = steps_x ? (line_x - x0) * inv_dx : 2.0, ty = steps_y ? (line_y - y0) * inv_dy : 2.0;
     const double step_tx = double(sx) * inv_dx, step_ty = double(sy) * inv_dy;
-    const double* pc = t.p.data() + (ix0 - t.c0) * stride + (iy0 - t.r0) * 3;
+    const double* pc = t.p.data() + (iy0 - t.r0) * line + (ix0 - t.c0) * 3;
     const double* pm = t.m.data() + (iy0 - t.r0);
     double base_y = double(iy0);
     // (solid angle, colour 0) and (colour 1, colour 2) as pairs, as edge_integral's.
     v2d sum01 = {0.0, 0.0}, sum23 = {0.0, 0.0};
     auto piece = [&](double px, double py, double qx, double qy) {
         const double ex = px - qx, vbar = 0.5 * (py + qy) - base_y;  // minus: -P dx
-        const v2d b01 = {pm[0], pc[0]}, s01 = v2d{pm[1], pc[3]} - b01;
-        const v2d b23 = load2(pc + 1), s23 = load2(pc + 4) - b23;
+        const v2d b01 = {pm[0], pc[0]}, s01 = v2d{pm[1], pc[line]} - b01;
+        const v2d b23 = load2(pc + 1), s23 = load2(pc + line + 1) - b23;
         sum01 += ex * (b01 + s01 * vbar);
         sum23 += ex * (b23 + s23 * vbar);
     };
     double px = x0, py = y0;
-    const int64_t step_cx = sx * stride, step_cy = sy * 3;
+    const int64_t step_cx = sx * 3, step_cy = sy * line;
     for (int left = steps_x + steps_y; left > 0; --left) {
         const bool across_x = tx < ty;
         const double qx = across_x ? line_x : x0 + ty * dx;
