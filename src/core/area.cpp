@@ -606,12 +606,17 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     const Geometry& s = job.cv.src;
     // The box of every corner of rows [j0, j1]; where that is too large (a pixel far off, as
     // near a pole), the box of the direct pixels' corners only.
-    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (size_t k = g.at(0, j0); k <= g.at(g.w, j1); ++k) {
-        xmin = std::min(xmin, g.x[k]);
-        xmax = std::max(xmax, g.x[k]);
-        ymin = std::min(ymin, g.y[k]);
-        ymax = std::max(ymax, g.y[k]);
+    if (!g.usable) return false;  // no direct pixels
+    double xmin = g.xmin, xmax = g.xmax, ymin = g.ymin, ymax = g.ymax;  // all rows: the grid's
+    if (j0 > 0 || j1 < g.h) {
+        xmin = ymin = 1e300;
+        xmax = ymax = -1e300;
+        for (size_t k = g.at(0, j0); k <= g.at(g.w, j1); ++k) {
+            xmin = std::min(xmin, g.x[k]);
+            xmax = std::max(xmax, g.x[k]);
+            ymin = std::min(ymin, g.y[k]);
+            ymax = std::max(ymax, g.y[k]);
+        }
     }
     if ((xmax - xmin + 2.0) * (ymax - ymin + 2.0) > double(kMaxTableTexels) ||
         ymin < double((g.ref_cell / s.columns) * s.cell_height() + s.guard) ||
@@ -655,13 +660,7 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
 // between the first and last rows, the grid less than half a turn wide (no side can jump).
 bool whole_tile_direct(const Geometry& g, const CornerGrid& grid) {
     if (g.family != kLatlong && g.family != kTennisball) return false;
-    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
-    for (size_t k = 0; k < grid.x.size(); ++k) {
-        xmin = std::min(xmin, grid.x[k]);
-        xmax = std::max(xmax, grid.x[k]);
-        ymin = std::min(ymin, grid.y[k]);
-        ymax = std::max(ymax, grid.y[k]);
-    }
+    const double xmin = grid.xmin, xmax = grid.xmax, ymin = grid.ymin, ymax = grid.ymax;
     const int64_t cell = grid.ref_cell;
     const double margin = 1e-6;
     double x0 = double((cell % g.columns) * g.cell_width() + g.guard);
@@ -848,7 +847,7 @@ void refine_tile_edges(const AreaJob& job, const CornerGrid& g, TileScratch& ts,
         size_t a = g.at(i0, j0), b = g.at(i0 + di, j0 + dj);
         double ox0 = double(g.i0 + i0) * cv.scale_x, oy0 = double(g.j0 + j0) * cv.scale_y;
         double ox1 = double(g.i0 + i0 + di) * cv.scale_x, oy1 = double(g.j0 + j0 + dj) * cv.scale_y;
-        bool fold = folded && edge_on_fold(cv, cell, ox0, oy0, ox1, oy1, g.exact[a], g.exact[b]);
+        bool fold = folded && edge_on_fold(cv, cell, ox0, oy0, ox1, oy1, g.corner_point(a), g.corner_point(b));
         if (!fold) {
             double dx, dy, bend = edge_curve(g, i0, j0, di, dj, dx, dy);
             if (bend >= 0.0 && bend <= kParabolaBend * kChordTol) {
@@ -1069,7 +1068,8 @@ void tile_pixels(const AreaJob& job, SlowPath& sp, PixelSums& sums, CornerGrid& 
                 } else {
                     std::fill(sums.acc, sums.acc + sums.nch, 0.0);
                     sums.weight = 0.0;
-                    SourcePoint corners[4] = {grid.exact[k[0]], grid.exact[k[1]], grid.exact[k[2]], grid.exact[k[3]]};
+                    SourcePoint corners[4] = {grid.corner_point(k[0]), grid.corner_point(k[1]),
+                                              grid.corner_point(k[2]), grid.corner_point(k[3])};
                     side_paths(grid, ts, i, j, usable);
                     slow_rect(sp, double(pi) * cv.scale_x, double(pj) * cv.scale_y,
                               double(pi + 1) * cv.scale_x, double(pj + 1) * cv.scale_y, corners,

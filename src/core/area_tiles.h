@@ -22,13 +22,14 @@ struct CornerGrid {
     int64_t i0, j0;  // output pixel of corner (0, 0)
     int w, h;        // pixels; corners (w + 1) x (h + 1)
     int64_t ref_cell;
-    std::vector<SourcePoint> exact;  // the canonical point of every corner (cell: its own)
+    std::vector<SourcePoint> exact;  // the canonical point of every mapped corner (cell: its own)
     std::vector<double> x, y;        // every corner in ref_cell's continued coordinates
     std::vector<int64_t> fx, fy;     // the texel of each (floor of x, y), for a usable grid
     std::vector<char> inside;        // corner interpolated (else mapped exactly)
     double bend;                     // how far pixel edges' images stray from chords (pixels)
     bool usable;                     // every corner has a point in ref_cell
     std::vector<double> coons_u;     // coons_fill's scratch: i / w of a patch's columns
+    double xmin, xmax, ymin, ymax;   // the box of every corner (x, y), of a usable grid
 
     void resize(int w_, int h_) {
         w = w_;
@@ -42,6 +43,8 @@ struct CornerGrid {
         inside.assign(count, 0);
     }
     size_t at(int i, int j) const { return size_t(j) * size_t(w + 1) + size_t(i); }
+    // Corner k's source point: mapped (exact), or interpolated in the reference cell.
+    SourcePoint corner_point(size_t k) const { return inside[k] ? SourcePoint{x[k], y[k], ref_cell} : exact[k]; }
 };
 
 // Exact source point of output corner (x, y) through output cell `cell`.
@@ -151,13 +154,8 @@ inline bool coons_fill(const Conversion& cv, int64_t cell, CornerGrid& g, int a0
             for (int i = 1; i < w; ++i) row[i] = (1.0 - v) * top[i] + v * bot[i] + base + us[i] * slope;
         }
     }
-    for (int j = b0 + 1; j < b1; ++j) {
-        size_t k = g.at(a0 + 1, j);
-        for (int i = a0 + 1; i < a1; ++i, ++k) {
-            g.exact[k] = {g.x[k], g.y[k], g.ref_cell};
-            g.inside[k] = 1;
-        }
-    }
+    // Interpolated corners: their points are (x, y) in the reference cell (corner_point).
+    for (int j = b0 + 1; j < b1; ++j) std::fill_n(g.inside.begin() + g.at(a0 + 1, j), a1 - a0 - 1, char(1));
     const int checks[5][2] = {{2, 2}, {1, 1}, {3, 1}, {1, 3}, {3, 3}};  // quarters of the grid
     for (int c = 0; c < ((w >= 4 && h >= 4) ? 5 : 1); ++c) {
         int i = a0 + (w * checks[c][0]) / 4, j = b0 + (h * checks[c][1]) / 4;
@@ -311,10 +309,19 @@ inline void map_grid(const Conversion& cv, int64_t cell, int64_t i0, int64_t j0,
         return;
     }
     g.bend = grid_bend(g);
+    double xmin = 1e300, xmax = -1e300, ymin = 1e300, ymax = -1e300;
     for (size_t k = 0; k < g.x.size(); ++k) {
         g.fx[k] = floor_texel(g.x[k]);
         g.fy[k] = floor_texel(g.y[k]);
+        xmin = std::min(xmin, g.x[k]);
+        xmax = std::max(xmax, g.x[k]);
+        ymin = std::min(ymin, g.y[k]);
+        ymax = std::max(ymax, g.y[k]);
     }
+    g.xmin = xmin;
+    g.xmax = xmax;
+    g.ymin = ymin;
+    g.ymax = ymax;
 }
 
 
