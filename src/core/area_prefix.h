@@ -122,7 +122,8 @@ struct PrefixTable {
 // G(t) = t^3 / 3 - t^2 / 2 (the parabola's sliver, measured along the chord). Exact for the
 // sliver's area (its solid angle where the density is constant); f is taken on the chord, so
 // a sliver that reaches past a texel line the chord does not cross counts that part as the
-// chord's texel. One walk instead of a polyline's two or four.
+// chord's texel. One walk instead of a polyline's two or four. (area.cpp scales the bow to
+// the sliver of the polyline through the parabola's points, which the general path takes.)
 template <int NCH, bool kGrad, bool kBow = false>
 void edge_integral(const PrefixTable& t, const SourceModel& model, int64_t row_base, double x0,
                    double y0, int64_t ix0, int64_t iy0, double x1, double y1, int64_t ix1,
