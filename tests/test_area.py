@@ -1106,7 +1106,9 @@ def test_a_resized_lat_long_is_the_exact_box_integral_of_its_source(n_src, n_out
         np.testing.assert_allclose(out, truth / weight[..., None], rtol=rtol, atol=0)
 
 
-@pytest.mark.parametrize("to, n", [("equal-area", 32), ("octahedral", 32), ("eac", 32), ("cube-vcross", 48)])
+@pytest.mark.parametrize(
+    "to, n", [("equal-area", 32), ("octahedral", 32), ("eac", 32), ("cube-vcross", 48)]
+)
 def test_footprints_of_curved_tiles_tile_the_sphere(to, n):
     """A 48-row lat-long (its poles and most of its rows curved into these layouts): the
     pixels' solid angles, each its own footprint's, add up to 4π within 2e-6. A side the
