@@ -630,19 +630,16 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
         direct_corner_box(g, ts, j0, j1, xmin, xmax, ymin, ymax);
     }
     if (xmin > xmax) return false;
-    // A curved tile's polylines may bulge past their corners. (Its parabola edges do too, but
-    // the box's walk takes them as bowed chords, which stay between their corners; the linear
-    // reconstruction's walks them as polylines.)
-    auto extend = [&](double x, double y) {
-        xmin = std::min(xmin, x);
-        xmax = std::max(xmax, x);
-        ymin = std::min(ymin, y);
-        ymax = std::max(ymax, y);
-    };
-    if (ts.curved && slopes) {
-        each_edge_point(g, ts.edges, extend);
-    } else if (ts.curved) {
-        for (size_t k = 0; k < ts.edges.px.size(); ++k) extend(ts.edges.px[k], ts.edges.py[k]);
+    // A curved tile's polylines may bulge past their corners, its parabola edges too: a bowed
+    // chord stays between its corners, but a side shared with a pixel that is not walked here
+    // runs along the polyline through the parabola's points (edge_pixels).
+    if (ts.curved) {
+        each_edge_point(g, ts.edges, [&](double x, double y) {
+            xmin = std::min(xmin, x);
+            xmax = std::max(xmax, x);
+            ymin = std::min(ymin, y);
+            ymax = std::max(ymax, y);
+        });
     }
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax), r0 = floor_texel(ymin), r1 = floor_texel(ymax);
     if ((c1 - c0 + 1) * (r1 - r0 + 1) > kMaxTableTexels) return false;
