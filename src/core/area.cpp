@@ -431,6 +431,17 @@ void each_edge_point(const CornerGrid& g, const EdgeMemo& e, F&& f) {
         for (int i = 0; i <= g.w; ++i) parabola(e.vertical(i, j), g.at(i, j), g.at(i, j + 1));
 }
 
+// Grow the box [xmin, xmax] x [ymin, ymax] to hold every point of every edge of a curved tile.
+void extend_by_edge_points(const CornerGrid& g, const EdgeMemo& e, double& xmin, double& xmax,
+                           double& ymin, double& ymax) {
+    each_edge_point(g, e, [&](double x, double y) {
+        xmin = std::min(xmin, x);
+        xmax = std::max(xmax, x);
+        ymin = std::min(ymin, y);
+        ymax = std::max(ymax, y);
+    });
+}
+
 // Integral of the grid's edge from corner a to corner b through the tile's table, along its
 // polyline (count refinement points px, py) in a curved tile, or (bow not 0) the parabola
 // about its chord that edge_integral's bow describes. Inlined into edge_pixels' loops (as a
@@ -633,14 +644,7 @@ bool tile_table(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int j0
     // A curved tile's polylines may bulge past their corners, its parabola edges too: a bowed
     // chord stays between its corners, but a side shared with a pixel that is not walked here
     // runs along the polyline through the parabola's points (edge_pixels).
-    if (ts.curved) {
-        each_edge_point(g, ts.edges, [&](double x, double y) {
-            xmin = std::min(xmin, x);
-            xmax = std::max(xmax, x);
-            ymin = std::min(ymin, y);
-            ymax = std::max(ymax, y);
-        });
-    }
+    if (ts.curved) extend_by_edge_points(g, ts.edges, xmin, xmax, ymin, ymax);
     int64_t c0 = floor_texel(xmin), c1 = floor_texel(xmax), r0 = floor_texel(ymin), r1 = floor_texel(ymax);
     if ((c1 - c0 + 1) * (r1 - r0 + 1) > kMaxTableTexels) return false;
     const int64_t row_base = (g.ref_cell / s.columns) * s.cell_height();
@@ -956,14 +960,7 @@ void fold_guard(const AreaJob& job, const CornerGrid& g, TileScratch& ts, int64_
 void density_box(const CornerGrid& g, TileScratch& ts) {
     double xmin, xmax, ymin, ymax;
     direct_corner_box(g, ts, 0, g.h, xmin, xmax, ymin, ymax);
-    if (ts.curved) {
-        each_edge_point(g, ts.edges, [&](double x, double y) {
-            xmin = std::min(xmin, x);
-            xmax = std::max(xmax, x);
-            ymin = std::min(ymin, y);
-            ymax = std::max(ymax, y);
-        });
-    }
+    if (ts.curved) extend_by_edge_points(g, ts.edges, xmin, xmax, ymin, ymax);
     if (!(xmin <= xmax && ymin <= ymax) ||
         (xmax - xmin + 2.0) * (ymax - ymin + 2.0) > double(kMaxTableTexels)) {
         ts.density.reset(g.ref_cell, 0, 0, -1, -1);
